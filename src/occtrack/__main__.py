@@ -1,0 +1,3 @@
+from occtrack.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,1 @@
+"""Reading and writing the files occtrack exchanges with users."""

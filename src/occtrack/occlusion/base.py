@@ -1,0 +1,63 @@
+"""The occlusion interface shared by every tracker in occtrack.
+
+Occlusion changes only each component's detection and miss terms (paper section IV):
+
+    hit   l_kj = w_k P_D(x_k) v_k p(z_j | x_k)
+    miss  m_k  = w_k (1 - P_D(x_k) v_k + P_D(x_k) v_k q_k)
+
+v_k is the probability that component k's object is visible (object-wise occlusion, static
+approximation: P_D(x) <- P_D(x) P(v | x), paper eq. "misstermOWO") and q_k the probability that
+its would-be measurement is hidden by the measurements that were seen (measurement-wise
+occlusion: the integral of p(z | x_k) p(not v | z, Z^V), paper eq. "new_individual_MM").
+`none` returns v = 1, q = 0; object-wise returns q = 0; measurement-wise returns v = 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class OcclusionContext:
+    """What an occlusion model may look at when it sets each component's terms.
+
+    means / covs: predicted component states (covs None for particles); weights: each
+    component's weight within its object; owner: the object index of each component (-1 for the
+    Poisson part); existence: r of each object; measurements: this step's visible measurements;
+    measurement_model: the model that maps states to measurements.
+    """
+
+    means: np.ndarray
+    covs: np.ndarray | None
+    weights: np.ndarray
+    owner: np.ndarray
+    existence: np.ndarray
+    measurements: np.ndarray
+    measurement_model: Any = None
+
+
+@dataclass(frozen=True)
+class OcclusionTerms:
+    """visible[k] = v_k and hidden[k] = q_k, both in [0, 1], one per component."""
+
+    visible: np.ndarray
+    hidden: np.ndarray
+
+
+class OcclusionModel(Protocol):
+    name: str
+
+    def terms(self, ctx: OcclusionContext) -> OcclusionTerms: ...
+
+
+class NoOcclusion:
+    """Every object is visible and no measurement is ever hidden."""
+
+    name = "none"
+
+    def terms(self, ctx: OcclusionContext) -> OcclusionTerms:
+        k = len(ctx.means)
+        return OcclusionTerms(np.ones(k), np.zeros(k))

@@ -1,0 +1,1 @@
+"""Pictures of what the tracker believed: frames, scenes, runs. matplotlib, Agg backend."""
