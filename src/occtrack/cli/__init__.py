@@ -14,8 +14,11 @@ from occtrack import __version__
 from occtrack.errors import OcctrackError
 
 COMMANDS = (
+    "demo",
+    "eval",
     "foursquare",
     "reproduce",
+    "simulate_detections",
 )
 
 

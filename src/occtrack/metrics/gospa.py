@@ -73,8 +73,7 @@ def gospa(truth: np.ndarray, estimates: np.ndarray,
           c: float = 1.0, p: float = 1.0) -> Gospa:
     """GOSPA between two sets given as arrays of rows. `distance` is "euclidean", "iou"
     (1 - IoU of left, top, width, height boxes) or a callable (A, B) -> (len(A), len(B))."""
-    truth = np.asarray(truth, dtype=float).reshape(len(truth), -1)
-    estimates = np.asarray(estimates, dtype=float).reshape(len(estimates), -1)
+    truth, estimates = _rows(truth), _rows(estimates)
     if callable(distance):
         fn = distance
     elif distance in DISTANCES:
@@ -87,6 +86,14 @@ def gospa(truth: np.ndarray, estimates: np.ndarray,
     else:
         d = np.zeros((len(truth), len(estimates)))
     return gospa_from_distances(d, c, p)
+
+
+def _rows(x) -> np.ndarray:
+    """One row per set member; an empty set may come as shape (0,) or (0, k)."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim == 2:
+        return x
+    return x.reshape(len(x), -1) if x.size else np.zeros((len(x), 0))
 
 
 def euclidean(a: np.ndarray, b: np.ndarray) -> np.ndarray:

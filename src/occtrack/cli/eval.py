@@ -1,0 +1,139 @@
+"""`occtrack eval GT_FILE RESULT_FILE`: score a tracker's result file against ground truth."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from occtrack.errors import OcctrackError
+from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo
+from occtrack.metrics import protocols
+from occtrack.metrics.protocols import KEYS
+
+NAME = "eval"
+HELP = "score a result file against ground truth (CLEAR MOT, IDF1, HOTA, GOSPA)"
+DESCRIPTION = f"""\
+Score a tracker's MOTChallenge result file against a ground-truth file and print MOTA, MOTP,
+IDF1, HOTA, mostly tracked / lost, FP, FN, ID switches, GOSPA and the cardinality error.
+
+Files are read as TrackEval reads them (comma or space separated, CRLF line ends, float ids
+and frames truncated, extra columns ignored); a malformed row stops with its file and line.
+The sequence length is the ground truth's seqinfo.ini (SEQ/gt/gt.txt layout), --frames, or the
+last frame in either file; result ids must be unique within a frame.
+
+Protocols:
+
+{protocols.DESCRIPTION["paper"]}
+
+{protocols.DESCRIPTION["mot17"]}
+
+{protocols.GOSPA_DESCRIPTION}
+
+--json prints one object with the keys
+  {", ".join(KEYS[:6])},
+  {", ".join(KEYS[6:])}:
+fractions in [0, 1] (not percent), counts as integers, null where undefined (hota under
+paper).
+
+examples:
+  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt
+  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --protocol paper --json"""
+
+LABELS = {
+    "mota": "MOTA", "motp": "MOTP", "idf1": "IDF1", "hota": "HOTA",
+    "mostly_tracked": "mostly tracked", "mostly_lost": "mostly lost", "fp": "FP", "fn": "FN",
+    "id_switches": "ID switches", "gospa": "GOSPA", "cardinality_error": "cardinality error",
+}
+
+NOTES = {
+    "paper": {
+        "mota": "normalised by the number of result boxes (roles swapped)",
+        "motp": "mean 1 - IoU of matched pairs, lower is better",
+        "idf1": "any pair may match",
+        "hota": "not part of the paper protocol",
+        "mostly_tracked": "result tracks matched >= 80 % of their frames",
+        "mostly_lost": "result tracks matched < 20 % of their frames",
+        "fp": "IDFP: true boxes the identity matching leaves out",
+        "fn": "IDFN: result boxes the identity matching leaves out",
+        "id_switches": "motmetrics switches, roles swapped",
+    },
+    "mot17": {
+        "mota": "TrackEval CLEAR, IoU >= 0.5",
+        "motp": "mean IoU of matches, higher is better",
+        "idf1": "TrackEval Identity",
+        "hota": "TrackEval HOTA, mean over thresholds 0.05..0.95",
+        "mostly_tracked": "pedestrian tracks matched > 80 % of their frames",
+        "mostly_lost": "pedestrian tracks matched < 20 % of their frames",
+        "fp": "result boxes not matched",
+        "fn": "pedestrian boxes not matched",
+        "id_switches": "TrackEval IDSW",
+    },
+}
+COMMON_NOTES = {
+    "gospa": "summed over frames; c = 1, p = 1, alpha = 2, 1 - IoU",
+    "cardinality_error": "result boxes / true boxes - 1",
+}
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("gt", metavar="GT_FILE", help="ground-truth file (MOTChallenge gt.txt)")
+    parser.add_argument("result", metavar="RESULT_FILE", help="tracker result file")
+    parser.add_argument("--protocol", choices=protocols.PROTOCOLS, default="mot17",
+                        help="scoring protocol (default: mot17, the official one; paper: the "
+                             "paper's Table II scoring, see above)")
+    parser.add_argument("--frames", type=int, metavar="N",
+                        help="sequence length (default: seqLength from the ground truth's "
+                             "seqinfo.ini, else the last frame in either file)")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object instead of the table")
+
+
+def _num_frames(args: argparse.Namespace) -> int | None:
+    if args.frames is not None:
+        if args.frames < 1:
+            raise OcctrackError(f"--frames must be at least 1, got {args.frames}")
+        return args.frames
+    folder = find_seqinfo(args.gt)
+    return int(read_seqinfo(folder)["length"]) if folder is not None else None
+
+
+def _format(key: str, value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, int):
+        return str(value)
+    if key == "gospa":
+        return f"{value:.1f}"
+    return f"{value:.4f}"
+
+
+def run(args: argparse.Namespace) -> int:
+    from occtrack.metrics.evaluate import evaluate_frames
+
+    start = time.perf_counter()
+    gt = read_mot(args.gt, "gt")
+    result = read_mot(args.result, "result")
+    num_frames = _num_frames(args)
+    left_out = int(protocols.result_classes_left_out(result, args.protocol).sum())
+    if left_out:
+        print(f"occtrack eval: note: {left_out} of {len(result)} result rows name a class other "
+              f"than pedestrian (column 8) and are not scored", file=sys.stderr)
+    frames = protocols.scored_frames(gt, result, args.protocol, num_frames)
+    values = evaluate_frames(frames, gt, result)
+    seconds = time.perf_counter() - start
+
+    if args.json:
+        print(json.dumps(values))
+        return 0
+    notes = {**NOTES[args.protocol], **COMMON_NOTES}
+    print(f"{args.result} against {args.gt}")
+    print(f"protocol {args.protocol}: {protocols.SUMMARY[args.protocol]}")
+    print()
+    for key in KEYS:
+        print(f"  {LABELS[key]:<18} {_format(key, values[key]):>10}   {notes[key]}")
+    print()
+    print(f"scored {frames.num_frames} frames, {frames.num_truth} true boxes, "
+          f"{frames.num_estimates} result boxes, {seconds:.2f} s")
+    return 0

@@ -1,0 +1,69 @@
+"""One entry point for scoring a tracker's result against ground truth under a protocol.
+
+`evaluate` returns the numbers of `occtrack eval --json`; `gospa_per_frame` the per-frame GOSPA
+behind its total, for plots. See `occtrack.metrics.protocols` for what each protocol scores.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from occtrack.io.mot import MotTable
+from occtrack.metrics.clear import clear_mot
+from occtrack.metrics.gospa import gospa_from_distances
+from occtrack.metrics.protocols import GOSPA_C, GOSPA_P, KEYS, ScoredFrames, scored_frames
+from occtrack.metrics.trackeval_mot17 import scores as trackeval_scores
+
+__all__ = ["KEYS", "evaluate", "evaluate_frames", "frame_gospa", "gospa_per_frame"]
+
+
+def evaluate(gt: MotTable, result: MotTable, protocol: str,
+             num_frames: int | None = None) -> dict:
+    """Score `result` against `gt` under `protocol` ("paper" or "mot17").
+
+    Returns a dict with exactly the keys in `KEYS`. Fractions (MOTA, MOTP, IDF1, HOTA) are in
+    [0, 1], not percent (MOTA can be negative); counts are ints; GOSPA is summed over frames.
+    A value is None where it is undefined: HOTA under `paper`, a ratio whose denominator is
+    zero. `num_frames` is the sequence length (seqLength); by default the last frame present.
+    """
+    return evaluate_frames(scored_frames(gt, result, protocol, num_frames), gt, result)
+
+
+def gospa_per_frame(gt: MotTable, result: MotTable, protocol: str,
+                    num_frames: int | None = None) -> np.ndarray:
+    """GOSPA of each frame (entry t is frame t + 1) on the boxes `protocol` scores; the sum is
+    `evaluate(...)["gospa"]`."""
+    return frame_gospa(scored_frames(gt, result, protocol, num_frames))
+
+
+def frame_gospa(frames: ScoredFrames) -> np.ndarray:
+    """Per-frame GOSPA (c = 1, p = 1, alpha = 2, distance 1 - IoU) of already scored frames."""
+    return np.array([gospa_from_distances(1.0 - iou, GOSPA_C, GOSPA_P).total
+                     for iou in frames.iou], dtype=float)
+
+
+def evaluate_frames(frames: ScoredFrames, gt: MotTable, result: MotTable) -> dict:
+    """`evaluate` on frames already scored by `scored_frames(gt, result, ...)`, so that a plot
+    of `frame_gospa(frames)` and the table share one preprocessing."""
+    if frames.protocol == "mot17":
+        values = trackeval_scores(frames.trackeval)
+    else:
+        objects = [result.id[r] for r in frames.estimate_rows]
+        hypotheses = [gt.id[r] for r in frames.truth_rows]
+        distances = [1.0 - iou.T for iou in frames.iou]
+        c = clear_mot(objects, hypotheses, distances)
+        values = {"mota": c.mota, "motp": c.motp, "idf1": c.idf1, "hota": None,
+                  "mostly_tracked": c.mostly_tracked, "mostly_lost": c.mostly_lost,
+                  "fp": c.idfp, "fn": c.idfn, "id_switches": c.num_switches}
+    num_truth = frames.num_truth
+    values["gospa"] = float(frame_gospa(frames).sum())
+    values["cardinality_error"] = (frames.num_estimates / num_truth - 1.0) if num_truth else None
+    return {key: _finite_or_none(values[key]) for key in KEYS}
+
+
+def _finite_or_none(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
