@@ -19,6 +19,7 @@ COMMANDS = (
     "foursquare",
     "reproduce",
     "simulate_detections",
+    "track",
 )
 
 

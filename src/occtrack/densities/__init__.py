@@ -1,0 +1,1 @@
+"""Single-object densities held as arrays, predicted and updated all at once."""

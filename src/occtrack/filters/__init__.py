@@ -1,0 +1,1 @@
+"""Multi-object filters: the Gaussian-mixture Poisson multi-Bernoulli filter."""

@@ -1,0 +1,380 @@
+"""Track-oriented Poisson multi-Bernoulli filter over Gaussian mixtures (paper section III).
+
+Objects are a multi-Bernoulli set plus a Poisson part (DESIGN section 1). Bernoulli i has
+existence r_i and a Gaussian-mixture density; the Poisson part, objects never detected, is a
+Gaussian-mixture intensity. All of them live in one pool of at most `capacity` components:
+component k has a mass w_k, a Gaussian (mean, covariance), the probabilities d_k that it is
+detectable and o_k that its measurement can be occluded (two-state Markov features), and a
+label: the slot of its Bernoulli, or -1 for the Poisson part. A Bernoulli's existence is the
+sum of its components' masses, r_i = sum_{k in i} w_k, and its density their normalised mixture.
+
+One step (predict, birth, update):
+
+    occlusion   v_k, q_k from the occlusion model; with occludability o_k only an occludable
+                measurement can be hidden, so P_D = d_k (1 - o_k + o_k v_k) and
+                miss_k = 1 - P_D + d_k o_k v_k q_k                       (paper sec. IV)
+    hit         l_kj = w_k P_D p(z_j | x_k)
+    objects     L_ij = sum_{k in i} l_kj,  miss_i = 1 - r_i + sum_{k in i} w_k miss_k
+    new         L_0j = kappa p_F(z_j) + sum_{k Poisson} l_kj
+    association p_hit, p_miss, p_new from loopy belief propagation (Williams and Lau)
+    children    miss child of k in i:  w_k miss_k p_miss_i / miss_i  (state kept, d and o
+                updated by Bayes), hit child of k by z_j: l_kj p_hit_ij / L_ij (Kalman update,
+                d = 1); Poisson components: miss child w_k miss_k, hit child l_kj p_new_j / L_0j,
+                which together are the new Bernoulli of measurement j, existence
+                p_new_j (L_0j - kappa p_F) / L_0j.
+
+Then the heaviest `capacity` children are kept (lighter than `prune_mass` dropped); each
+Bernoulli keeps at most its `max_components_per_object` heaviest, rescaled so that its existence
+is unchanged (only the tail of its density goes); the `max_labels` strongest Bernoullis keep a
+label and the rest, with those below `label_min_existence`, are recycled into the Poisson part
+(their components lose the label, their mass becomes intensity); components of one object that
+fall in the same small cell of state space are merged by moment matching. Every array has a
+fixed capacity, so memory stays flat however long the sequence.
+
+Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
+pluggable miss term.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from occtrack.association import lbp_marginals
+from occtrack.models.birth import EdgeBirths
+from occtrack.models.box import BoxMeasurement
+from occtrack.models.markov import TwoStateMarkov
+from occtrack.models.motion import ConstantVelocity
+from occtrack.occlusion.base import OcclusionContext, OcclusionModel
+from occtrack.tracker.config import TrackerConfig
+
+N_BIRTH = 5
+LOG_FLOOR = -300.0
+
+
+class GaussianMixturePMB:
+    """The filter's state and its step. `config` is already validated."""
+
+    def __init__(self, config: TrackerConfig, occlusion: OcclusionModel):
+        c = config
+        self.config = c
+        self.occlusion = occlusion
+        self.dt = c.dt
+        self.motion = ConstantVelocity(c.dt, c.position_noise, c.velocity_noise, c.size_noise)
+        self.measurement = BoxMeasurement(c.image_size, c.edge_std, c.border_margin)
+        self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
+        self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
+        self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
+        self.image_size = np.asarray(c.image_size, dtype=float)
+        self.survival_inside = float(np.exp(-c.death_rate * c.dt))
+        cap, L = c.capacity, c.max_labels
+        self.n = 0
+        self.mass = np.zeros(cap)
+        self.mean = np.zeros((cap, 2, 3))
+        self.cov = np.zeros((cap, 2, 3, 3))
+        self.det = np.zeros(cap)
+        self.occ = np.zeros(cap)
+        self.label = np.full(cap, -1, dtype=np.int64)
+        self.slot_used = np.zeros(L, dtype=bool)
+        self.slot_serial = np.full(L, -1, dtype=np.int64)  # unique per Bernoulli ever labelled
+        self._next_serial = 0
+        self.steps = 0
+        self.iterations = 0  # loopy BP iterations of the last step
+        # running sums of detected half-sizes (count, sum, sum of squares) for the birth prior
+        self._size_stats = np.zeros((3, 2))
+
+    # -- public -------------------------------------------------------------------------
+
+    def existence(self) -> np.ndarray:
+        """r of every label slot (0 where unused)."""
+        n = self.n
+        lab = self.label[:n] >= 0
+        return np.bincount(self.label[:n][lab], weights=self.mass[:n][lab],
+                           minlength=len(self.slot_used))
+
+    def object_means(self) -> tuple[np.ndarray, np.ndarray]:
+        """(r, mean state) of every slot: mass-weighted mean of its components' means."""
+        n = self.n
+        lab = self.label[:n] >= 0
+        idx, w = self.label[:n][lab], self.mass[:n][lab]
+        L = len(self.slot_used)
+        r = np.bincount(idx, weights=w, minlength=L)
+        flat = self.mean[:n][lab].reshape(-1, 6)
+        sums = np.stack([np.bincount(idx, weights=w * flat[:, c], minlength=L)
+                         for c in range(6)], axis=1)
+        means = (sums / np.maximum(r, 1e-300)[:, None]).reshape(L, 2, 3)
+        return r, means
+
+    def step(self, z: np.ndarray, scores: np.ndarray) -> None:
+        """Predict to this frame, add births, update with its detections z (M, 2, 2)."""
+        observed = self.measurement.observed(z)
+        self._learn_sizes(z, observed)
+        self._predict()
+        self._add_births()
+        self._update(z, observed, scores)
+        self.steps += 1
+
+    # -- prediction -----------------------------------------------------------------------
+
+    def _predict(self) -> None:
+        n = self.n
+        if n == 0:
+            return
+        self.mean[:n], self.cov[:n] = self.motion.predict(self.mean[:n], self.cov[:n])
+        self.det[:n] = self.detectability.predict(self.det[:n], self.dt)
+        self.occ[:n] = self.occludability.predict(self.occ[:n], self.dt)
+        centre, half = self.mean[:n, :, 0], self.mean[:n, :, 2]
+        inside = ((centre >= 0) & (centre <= self.image_size) & (half >= 1.0)).all(axis=1)
+        self.mass[:n] *= np.where(inside, self.survival_inside, self.config.exit_survival)
+
+    def _size_prior(self) -> tuple[np.ndarray, np.ndarray]:
+        c = self.config
+        count, total, squares = self._size_stats
+        if c.birth_half_size is not None:
+            mean = np.asarray(c.birth_half_size, dtype=float)
+        elif count[0] >= 2:
+            mean = total / count
+        else:
+            mean = np.array([30.0, 90.0])
+        if c.birth_half_size_std is not None:
+            std = np.asarray(c.birth_half_size_std, dtype=float)
+        elif count[0] >= 2:
+            std = np.sqrt(np.maximum(squares / count - (total / count) ** 2, 1.0))
+        else:
+            std = mean / 3.0
+        return mean, np.maximum(std, 1.0)
+
+    def _learn_sizes(self, z: np.ndarray, observed: np.ndarray) -> None:
+        full = observed.all(axis=(1, 2))
+        if not full.any():
+            return
+        half = 0.5 * (z[full, :, 1] - z[full, :, 0])
+        self._size_stats += np.stack([np.full(2, float(full.sum())), half.sum(axis=0),
+                                      (half**2).sum(axis=0)])
+
+    def _add_births(self) -> None:
+        c = self.config
+        spread = c.spread_birth_rate * self.dt + (c.initial_objects if self.steps == 0 else 0.0)
+        mass, means, covs = self.births.components(c.edge_birth_rate * self.dt, spread,
+                                                   *self._size_prior())
+        keep = mass > 0
+        b = int(keep.sum())
+        s = slice(self.n, self.n + b)
+        self.mass[s], self.mean[s], self.cov[s] = mass[keep], means[keep], covs[keep]
+        self.det[s] = c.birth_detectability
+        self.occ[s] = c.birth_occludability
+        self.label[s] = -1
+        self.n += b
+
+    # -- update ---------------------------------------------------------------------------
+
+    def _update(self, z: np.ndarray, observed: np.ndarray, scores: np.ndarray) -> None:
+        c = self.config
+        self._sort_by_label()
+        n, M = self.n, len(z)
+        mass, mean, cov = self.mass[:n], self.mean[:n], self.cov[:n]
+        det, occ, label = self.det[:n], self.occ[:n], self.label[:n]
+        L = len(self.slot_used)
+
+        r_slot = np.bincount(label[label >= 0], weights=mass[label >= 0], minlength=L)
+        within = np.where(label >= 0, mass / np.maximum(r_slot[label], 1e-300), mass)
+        ctx = OcclusionContext(means=mean, covs=cov, weights=within, owner=label,
+                               existence=r_slot, measurements=z,
+                               measurement_model=self.measurement)
+        terms = self.occlusion.terms(ctx)
+        v = np.clip(terms.visible, 0.0, 1.0)
+        q = np.clip(terms.hidden, 0.0, 1.0)
+        pd = det * (1.0 - occ + occ * v)
+        miss = 1.0 - pd + det * occ * v * q
+
+        hit = np.zeros((n, M))
+        if M:
+            log_hit = self.measurement.loglik(mean, cov, z, observed)
+            log_hit += np.log(np.maximum(mass * pd, 1e-300))[:, None]
+            # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
+            # which are slow to compute with, out of the arrays
+            np.exp(log_hit, out=hit, where=log_hit > LOG_FLOOR)
+
+        # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
+        # sorted by label, so each object's sums are sums over one contiguous run
+        slots = np.flatnonzero(self.slot_used)
+        A = len(slots)
+        row_of_slot = np.full(L, A, dtype=np.int64)
+        row_of_slot[slots] = np.arange(A)
+        rows = np.where(label >= 0, row_of_slot[np.maximum(label, 0)], A)
+        L_hit = np.zeros((A + 1, M))
+        r_obj = np.zeros(A + 1)
+        miss_mass = np.zeros(A + 1)
+        if n:
+            starts = np.flatnonzero(np.diff(rows, prepend=-1))
+            L_hit[rows[starts]] = np.add.reduceat(hit, starts, axis=0)
+            r_obj[rows[starts]] = np.add.reduceat(mass, starts)
+            miss_mass[rows[starts]] = np.add.reduceat(mass * miss, starts)
+        r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
+        clutter = c.clutter_density * np.clip(scores, c.score_floor, 1.0) ** (
+            -c.clutter_score_power)
+        w_new = clutter + L_hit[A]
+
+        marg = lbp_marginals(L_hit[:A], miss_obj, w_new, tol=c.lbp_tolerance,
+                             max_iter=c.lbp_max_iterations)
+        self.iterations = marg.iterations
+
+        hit_factor = np.zeros((A + 1, M))
+        np.divide(marg.p_hit, L_hit[:A], out=hit_factor[:A], where=L_hit[:A] > 0)
+        hit_factor[A] = marg.p_new / w_new
+        miss_factor = np.append(marg.p_miss / miss_obj, 1.0)
+        children = np.empty((n, M + 1))
+        children[:, 0] = mass * miss * miss_factor[rows]
+        np.multiply(hit, hit_factor[rows], out=children[:, 1:])
+
+        keep = self._select(children.ravel())
+        parent, j = np.divmod(keep, M + 1)
+        j -= 1
+        new_mass = children.ravel()[keep]
+        if c.max_components_per_object:
+            trim = self._trim_objects(new_mass, label[parent])
+            keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
+        new_mean = mean[parent]
+        new_cov = cov[parent]
+        new_label = label[parent]
+        d, o, vv, qq, mm = det[parent], occ[parent], v[parent], q[parent], miss[parent]
+        is_hit = j >= 0
+        # Bayes for the features. Missed: P(D=1 | miss) = d o (1 - v + v q) / miss and
+        # P(O=1 | miss) = o (1 - d + d (1 - v + v q)) / miss. Hit: D = 1 and
+        # P(O=1 | hit) = o v / (1 - o + o v).
+        hidden_if_occludable = 1.0 - vv + vv * qq
+        new_det = np.where(is_hit, 1.0, d * o * hidden_if_occludable / np.maximum(mm, 1e-300))
+        seen_o = o * vv / np.maximum(1.0 - o + o * vv, 1e-300)
+        missed_o = o * (1.0 - d + d * hidden_if_occludable) / np.maximum(mm, 1e-300)
+        new_occ = np.where(is_hit, seen_o, missed_o)
+        h = np.flatnonzero(is_hit)
+        if len(h):
+            new_mean[h], new_cov[h] = self.measurement.update(
+                new_mean[h], new_cov[h], z[j[h]], observed[j[h]])
+
+        newborn = np.where(is_hit & (new_label < 0), j, -1)
+        new_label = self._assign_labels(new_mass, new_label, newborn, M)
+        new_mass, new_mean, new_cov, new_det, new_occ, new_label = self._merge(
+            new_mass, new_mean, new_cov, new_det, new_occ, new_label)
+
+        k = len(new_mass)
+        self.n = k
+        self.mass[:k], self.mean[:k], self.cov[:k] = new_mass, new_mean, new_cov
+        self.det[:k], self.occ[:k] = np.clip(new_det, 0, 1), np.clip(new_occ, 0, 1)
+        self.label[:k] = new_label
+        self._cap_existence()
+
+    def _sort_by_label(self) -> None:
+        """Order the pool by label, Poisson part first (births arrive at the end)."""
+        n = self.n
+        order = np.argsort(self.label[:n], kind="stable")
+        if (order == np.arange(n)).all():
+            return
+        for arr in (self.mass, self.mean, self.cov, self.det, self.occ, self.label):
+            arr[:n] = arr[:n][order]
+
+    def _select(self, flat: np.ndarray) -> np.ndarray:
+        """Indices (sorted) of the heaviest children above the pruning mass, leaving room for
+        the next step's births."""
+        room = self.config.capacity - N_BIRTH
+        keep = np.flatnonzero(flat > self.config.prune_mass)
+        if len(keep) > room:
+            keep = keep[np.argpartition(-flat[keep], room - 1)[:room]]
+            keep.sort()
+        return keep
+
+    def _trim_objects(self, mass: np.ndarray, label: np.ndarray) -> np.ndarray:
+        """Which children to keep when each Bernoulli keeps at most `max_components_per_object`
+        (its heaviest); the kept ones are scaled up so that its existence is unchanged, only
+        its density loses the tail. `mass` is scaled in place."""
+        cap = self.config.max_components_per_object
+        order = np.lexsort([-mass, label])
+        grouped = label[order]
+        start = np.flatnonzero(np.diff(grouped, prepend=grouped[:1] - 1))
+        sizes = np.diff(np.append(start, len(order)))
+        rank = np.arange(len(order)) - np.repeat(start, sizes)
+        drop = (rank >= cap) & (grouped >= 0)
+        if not drop.any():
+            return np.ones(len(mass), dtype=bool)
+        total = np.add.reduceat(mass[order], start)
+        kept_total = np.add.reduceat(np.where(drop, 0.0, mass[order]), start)
+        scale = total / np.maximum(kept_total, 1e-300)
+        mass[order] *= np.repeat(scale, sizes)
+        keep = np.ones(len(mass), dtype=bool)
+        keep[order[drop]] = False
+        return keep
+
+    def _assign_labels(self, mass: np.ndarray, label: np.ndarray, newborn: np.ndarray,
+                       M: int) -> np.ndarray:
+        """Keep the `max_labels` strongest Bernoullis (existing and new) above the label
+        threshold; recycle the others into the Poisson part."""
+        L = len(self.slot_used)
+        lab = label >= 0
+        r_old = np.bincount(label[lab], weights=mass[lab], minlength=L)
+        born = newborn >= 0
+        r_new = np.bincount(newborn[born], weights=mass[born], minlength=M)
+        old = np.flatnonzero(self.slot_used)
+        new = np.flatnonzero(r_new > 0)
+        r_all = np.concatenate([r_old[old], r_new[new]])
+        eligible = r_all >= self.config.label_min_existence
+        ranked = np.argsort(-r_all, kind="stable")
+        ranked = ranked[eligible[ranked]][:L]
+        keep_old = np.zeros(len(old), dtype=bool)
+        keep_old[ranked[ranked < len(old)]] = True
+        keep_new = ranked[ranked >= len(old)] - len(old)
+        keep_new.sort()
+
+        dropped = old[~keep_old]
+        if len(dropped):
+            self.slot_used[dropped] = False
+            gone = np.zeros(L, dtype=bool)
+            gone[dropped] = True
+            label = np.where(lab & gone[np.maximum(label, 0)], -1, label)
+        if len(keep_new):
+            free = np.flatnonzero(~self.slot_used)[:len(keep_new)]
+            self.slot_used[free] = True
+            slot_of_meas = np.full(M, -1, dtype=np.int64)
+            slot_of_meas[new[keep_new]] = free
+            label = np.where(born, slot_of_meas[np.maximum(newborn, 0)], label)
+            self.slot_serial[free] = self._next_serial + np.arange(len(free))
+            self._next_serial += len(free)
+        return label
+
+    def _merge(self, mass, mean, cov, det, occ, label):
+        """Merge components of one label that fall in the same cell of (centre, velocity,
+        half-size) space by moment matching: masses add, the mean and covariance are those of
+        the pooled mixture (spread of the means included), d and o are mass-weighted averages.
+        """
+        if len(mass) < 2:
+            return mass, mean, cov, det, occ, label
+        c = self.config
+        cell = np.array([c.merge_position, c.merge_velocity, c.merge_position] * 2)
+        cells = np.floor(mean.reshape(-1, 6) / cell).astype(np.int64)
+        order = np.lexsort([cells[:, i] for i in range(5, -1, -1)] + [label])
+        key = np.concatenate([label[order, None], cells[order]], axis=1)
+        start = np.ones(len(order), dtype=bool)
+        start[1:] = (key[1:] != key[:-1]).any(axis=1)
+        if start.all():
+            return mass, mean, cov, det, occ, label
+        first = np.flatnonzero(start)
+        group = np.cumsum(start) - 1
+        m = mass[order]
+        total = np.add.reduceat(m, first)
+        share = m / total[group]
+        mu = np.add.reduceat(share[:, None, None] * mean[order], first)
+        dev = mean[order] - mu[group]
+        spread = cov[order] + dev[..., :, None] * dev[..., None, :]
+        sigma = np.add.reduceat(share[:, None, None, None] * spread, first)
+        d = np.add.reduceat(share * det[order], first)
+        o = np.add.reduceat(share * occ[order], first)
+        return total, mu, sigma, d, o, label[order][first]
+
+    def _cap_existence(self) -> None:
+        """Guard against r exceeding 1 by rounding: scale such an object's masses down."""
+        n = self.n
+        r = self.existence()
+        over = r > 1.0
+        if over.any():
+            lab = self.label[:n] >= 0
+            scale = np.where(over, 1.0 / np.maximum(r, 1e-300), 1.0)
+            self.mass[:n][lab] *= scale[self.label[:n][lab]]
+

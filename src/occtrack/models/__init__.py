@@ -1,0 +1,1 @@
+"""Models of one object: motion, measurement, Markov features, births."""

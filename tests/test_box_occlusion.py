@@ -1,0 +1,98 @@
+"""Box occlusion geometry and the object-wise and measurement-wise models, exact values."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from occtrack.models.box import BoxMeasurement
+from occtrack.occlusion.base import NoOcclusion, OcclusionContext
+from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, combine
+from occtrack.occlusion.box_measurementwise import MeasurementWise
+from occtrack.occlusion.box_objectwise import ObjectWiseExpectedValue
+from occtrack.occlusion.boxes import BOX_OCCLUSION_MODELS, box_occlusion
+
+
+def edges(x0, x1, y0, y1):
+    return np.array([[x0, x1], [y0, y1]], dtype=float)
+
+
+def states(*boxes):
+    """(centre, velocity 0, half-size) per axis from edge boxes."""
+    e = np.array(boxes)
+    return np.stack([(e[..., 0] + e[..., 1]) / 2, np.zeros(e.shape[:2]),
+                     (e[..., 1] - e[..., 0]) / 2], axis=-1)
+
+
+A = edges(0, 10, 0, 10)
+
+
+@pytest.mark.parametrize("occluder,expected", [
+    (edges(5, 15, 0, 20), 1.0),                         # half covered (x2, clipped), far lower
+    (edges(8, 18, 0, 12), 0.4 * (1 / 6 + 0.1) / 0.35),  # 20 % covered, bottom 1/6 lower
+    (edges(0, 10, 0, 10), 0.1 / 0.35),                  # same box: bottom gap 0
+    (edges(0, 10, -10, 8), 0.0),                        # bottom higher: farther away
+    (edges(20, 30, 0, 20), 0.0),                        # no overlap
+])
+def test_pairwise_occlusion_probability(occluder, expected):
+    p = BoxOcclusionGeometry()(A[None], occluder[None])
+    assert p.shape == (1, 1)
+    assert p[0, 0] == pytest.approx(expected, abs=1e-12)
+
+
+def test_occluders_combine_as_independent():
+    np.testing.assert_allclose(combine(np.array([[0.5, 0.5], [0.2, 0.0]])), [0.75, 0.2])
+
+
+def context(means, owner, existence, measurements, weights=None):
+    k = len(means)
+    return OcclusionContext(means=means, covs=np.tile(np.eye(3), (k, 2, 1, 1)),
+                            weights=np.ones(k) if weights is None else weights,
+                            owner=np.asarray(owner), existence=np.asarray(existence, float),
+                            measurements=measurements,
+                            measurement_model=BoxMeasurement((100, 100)))
+
+
+def test_measurement_wise_hidden_term_from_visible_detections():
+    means = states(A, edges(50, 60, 0, 10))
+    detections = np.array([edges(5, 15, 0, 20), edges(8, 18, 0, 12)])
+    terms = MeasurementWise().terms(context(means, [0, -1], [1.0], detections))
+    p2 = 0.4 * (1 / 6 + 0.1) / 0.35
+    np.testing.assert_allclose(terms.visible, [1.0, 1.0])
+    np.testing.assert_allclose(terms.hidden, [1 - (1 - 1.0) * (1 - p2), 0.0], atol=1e-12)
+    empty = MeasurementWise().terms(context(means, [0, -1], [1.0], np.zeros((0, 2, 2))))
+    np.testing.assert_array_equal(empty.hidden, [0.0, 0.0])
+
+
+def test_object_wise_uses_other_objects_mean_boxes_weighted_by_existence():
+    """Object 0 (two components) sits behind object 1 (r = 0.6); object 2 (r = 0.05) is
+    below the 0.1 existence floor; the Poisson component (owner -1) is hidden by all."""
+    comps = [A, edges(0, 10, 0, 10), edges(5, 15, 0, 20), edges(3, 13, 0, 20), A]
+    owner = [0, 0, 1, 2, -1]
+    weights = np.array([0.5, 0.5, 1.0, 1.0, 1.0])
+    terms = ObjectWiseExpectedValue().terms(
+        context(states(*comps), owner, [0.9, 0.6, 0.05], np.zeros((0, 2, 2)), weights))
+    same_bottom = 0.1 / 0.35  # ramp at a bottom gap of 0
+    np.testing.assert_allclose(terms.visible, [
+        1 - 0.6 * 1.0,  # object 0 half covered by object 1, whose bottom is lower
+        1 - 0.6 * 1.0,
+        1.0,  # object 1: object 0's bottom is higher, object 2 is too weak to count
+        1 - 0.6 * same_bottom,  # object 2: 80 % covered by object 1, same bottom
+        (1 - 0.6) * (1 - 0.9 * same_bottom),  # Poisson: by objects 1 and 0
+    ])
+    np.testing.assert_array_equal(terms.hidden, np.zeros(5))
+
+
+def test_an_object_never_occludes_itself():
+    terms = ObjectWiseExpectedValue().terms(
+        context(states(A, A), [0, 0], [1.0], np.zeros((0, 2, 2)), np.array([0.5, 0.5])))
+    np.testing.assert_array_equal(terms.visible, [1.0, 1.0])
+
+
+def test_models_chosen_by_name():
+    assert set(BOX_OCCLUSION_MODELS) == {"none", "object-wise", "measurement-wise"}
+    assert isinstance(box_occlusion("none"), NoOcclusion)
+    assert box_occlusion("measurement-wise").name == "measurement-wise"
+    assert box_occlusion("object-wise", min_existence=0.3).min_existence == 0.3
+    with pytest.raises(ValueError, match="unknown occlusion model 'grid'"):
+        box_occlusion("grid")

@@ -1,0 +1,127 @@
+"""Vectorised Gaussian components against plain one-at-a-time matrix Kalman filtering."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.special import log_ndtr
+from scipy.stats import multivariate_normal
+
+from occtrack.densities import gaussian
+from occtrack.models.box import BoxMeasurement, edges_from_ltwh, ltwh_from_edges
+from occtrack.models.markov import TwoStateMarkov
+from occtrack.models.motion import ConstantVelocity
+
+H = np.array([[1.0, 0.0, -1.0], [1.0, 0.0, 1.0]])
+
+
+def random_components(rng, k):
+    means = rng.normal(0, 200, (k, 2, 3)) + np.array([500.0, 10.0, 60.0])
+    a = rng.normal(0, 1, (k, 2, 3, 3))
+    covs = a @ np.swapaxes(a, -1, -2) * 30 + np.eye(3) * 5
+    return means, covs
+
+
+def full(means, covs):
+    """Block-diagonal 6-D state and covariance of one component, order (x block, y block)."""
+    P = np.zeros((6, 6))
+    P[:3, :3], P[3:, 3:] = covs
+    return means.reshape(6), P
+
+
+def plain_update(x, P, z, observed, R):
+    """Textbook Kalman update with the unobserved rows deleted from H, z and R."""
+    Hf = np.zeros((4, 6))
+    Hf[:2, :3], Hf[2:, 3:] = H, H
+    Rf = np.kron(np.eye(2), R)
+    rows = np.flatnonzero(observed.reshape(4))
+    Hf, Rf, zf = Hf[rows], Rf[np.ix_(rows, rows)], z.reshape(4)[rows]
+    S = Hf @ P @ Hf.T + Rf
+    K = P @ Hf.T @ np.linalg.inv(S)
+    x_new = x + K @ (zf - Hf @ x)
+    P_new = (np.eye(6) - K @ Hf) @ P
+    loglik = multivariate_normal(Hf @ x, S).logpdf(zf) if len(rows) else 0.0
+    return x_new, P_new, loglik
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_update_and_loglik_equal_plain_matrix_kalman(seed):
+    rng = np.random.default_rng(seed)
+    means, covs = random_components(rng, 7)
+    z = rng.normal(0, 200, (5, 2, 2)) + 500
+    observed = rng.random((5, 2, 2)) > 0.25
+    R = np.eye(2) * 144.0
+    ll = gaussian.loglik(means, covs, H, R, z, observed)
+    assert ll.shape == (7, 5)
+    k_idx, j_idx = np.meshgrid(np.arange(7), np.arange(5), indexing="ij")
+    k_idx, j_idx = k_idx.ravel(), j_idx.ravel()
+    new_means, new_covs = gaussian.update(means[k_idx], covs[k_idx], H, R, z[j_idx],
+                                          observed[j_idx])
+    for n, (k, j) in enumerate(zip(k_idx, j_idx, strict=True)):
+        x, P = full(means[k], covs[k])
+        x_ref, P_ref, ll_ref = plain_update(x, P, z[j], observed[j], R)
+        x_got, P_got = full(new_means[n], new_covs[n])
+        np.testing.assert_allclose(x_got, x_ref, rtol=1e-9, atol=1e-8)
+        np.testing.assert_allclose(P_got, P_ref, rtol=1e-8, atol=1e-8)
+        assert ll[k, j] == pytest.approx(ll_ref, rel=1e-10, abs=1e-9)
+
+
+def test_predict_equals_F_P_Ft_plus_Q():
+    rng = np.random.default_rng(3)
+    means, covs = random_components(rng, 4)
+    motion = ConstantVelocity(dt=0.2, position_noise=3.0, velocity_noise=5.0, size_noise=1.0)
+    m2, P2 = motion.predict(means, covs)
+    F, Q = motion.F, motion.Q
+    assert F[0, 1] == 0.2
+    np.testing.assert_allclose(np.diag(Q), [9 * 0.2, 25 * 0.2, 0.2])
+    for k in range(4):
+        for b in range(2):
+            np.testing.assert_allclose(m2[k, b], F @ means[k, b])
+            np.testing.assert_allclose(P2[k, b], F @ covs[k, b] @ F.T + Q)
+
+
+def test_updated_covariances_stay_symmetric_positive_definite():
+    rng = np.random.default_rng(4)
+    means, covs = random_components(rng, 200)
+    z = rng.normal(0, 200, (200, 2, 2)) + 500
+    _, P = gaussian.update(means, covs, H, np.eye(2) * 144.0, z)
+    np.testing.assert_array_equal(P, np.swapaxes(P, -1, -2))
+    assert (np.linalg.eigvalsh(P) > 0).all()
+
+
+def test_box_edges_round_trip_and_border_edges():
+    boxes = np.array([[0.0, 10.0, 50.0, 100.0], [1900.0, 990.0, 20.0, 90.0]])
+    edges = edges_from_ltwh(boxes)
+    np.testing.assert_array_equal(edges[1], [[1900.0, 1920.0], [990.0, 1080.0]])
+    np.testing.assert_array_equal(ltwh_from_edges(edges), boxes)
+    model = BoxMeasurement((1920, 1080), edge_std=12.0, border_margin=1.0)
+    np.testing.assert_array_equal(model.observed(edges),
+                                  [[[False, True], [True, True]], [[True, False], [True, False]]])
+
+
+def test_border_edge_likelihood_is_probability_beyond_border_times_peak_density():
+    """A left edge on the border: the right edge is scored as usual, the left one by
+    Phi((border - predicted edge) / sd) / (sqrt(2 pi) sigma)."""
+    model = BoxMeasurement((1920, 1080), edge_std=12.0, border_margin=1.0)
+    means = np.array([[[20.0, 0.0, 30.0], [500.0, 0.0, 80.0]]])
+    covs = np.tile(np.diag([100.0, 50.0, 25.0]), (1, 2, 1, 1))
+    z = edges_from_ltwh(np.array([[0.0, 430.0, 52.0, 165.0]]))
+    observed = model.observed(z)
+    got = model.loglik(means, covs, z, observed)[0, 0]
+    zhat, S, _ = gaussian.innovation(means, covs, H, model.R)
+    sd_left = np.sqrt(S[0, 0, 0, 0])
+    expected = (multivariate_normal(zhat[0, 1], S[0, 1]).logpdf(z[0, 1])
+                + multivariate_normal(zhat[0, 0, 1], S[0, 0, 1, 1]).logpdf(z[0, 0, 1])
+                + log_ndtr((1.0 - zhat[0, 0, 0]) / sd_left) - 0.5 * np.log(2 * np.pi * 144.0))
+    assert got == pytest.approx(expected, rel=1e-12)
+
+
+def test_markov_feature_forgets_its_ratio_every_half_second():
+    chain = TwoStateMarkov(stationary=0.8, half_second_ratio=0.9)
+    assert chain.predict(1.0, 0.5) == pytest.approx(0.8 + 0.1 * 0.2)
+    p = 0.0
+    for _ in range(4):
+        p = chain.predict(p, 0.125)
+    assert p == pytest.approx(0.8 - 0.1 * 0.8)
+    with pytest.raises(ValueError, match="outside"):
+        TwoStateMarkov(1.5, 0.5)

@@ -1,0 +1,210 @@
+"""The PMB box tracker: occlusion through a gap, invariants, repeatability, settings."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from occtrack.errors import OcctrackError
+from occtrack.io.mot import write_mot
+from occtrack.metrics.gospa import iou
+from occtrack.models.box import edges_from_ltwh
+from occtrack.occlusion.base import OcclusionTerms
+from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, combine
+from occtrack.scenarios.pedestrians import Crowd, crossing_pair, crowd_scene
+from occtrack.tracker import Tracker, TrackerConfig
+
+
+def track_of(scene, result, person, frames):
+    """The id matched (IoU >= 0.5) to truth id `person` at each of `frames` (0: none)."""
+    ids = []
+    for f in frames:
+        t = (scene.truth.frame == f) & (scene.truth.id == person)
+        r = result.frame == f
+        overlap = iou(scene.truth.box[t], result.box[r])
+        best = overlap.argmax() if overlap.size else -1
+        ids.append(int(result.id[r][best]) if best >= 0 and overlap[0, best] >= 0.5 else 0)
+    return ids
+
+
+def gap_frames(scene, person=1, other=2):
+    """Tracked frames (odd) where the person overlaps the other one and is not detected."""
+    gap = []
+    for f in range(1, scene.frames + 1, 2):
+        t = scene.truth.frame == f
+        a = scene.truth.box[t & (scene.truth.id == person)]
+        b = scene.truth.box[t & (scene.truth.id == other)]
+        d = scene.detections.box[scene.detections.frame == f]
+        if iou(a, b).max() > 0 and not (iou(a, d) >= 0.5).any():
+            gap.append(f)
+    return gap
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("occlusion", ["object-wise", "measurement-wise"])
+def test_hidden_pedestrian_keeps_its_label_with_occlusion(occlusion, seed):
+    scene = crossing_pair(seed)
+    gap = gap_frames(scene)
+    assert len(gap) >= 8  # about a second behind the nearer person, tracked at 15 Hz
+    result = Tracker(TrackerConfig(occlusion=occlusion)).run(scene.detections, scene.frames)
+    before = track_of(scene, result, 1, range(gap[0] - 40, gap[0] - 10, 2))
+    after = track_of(scene, result, 1, range(gap[-1] + 20, gap[-1] + 50, 2))
+    label = before[0]
+    assert label > 0 and set(before) == {label} and set(after) == {label}
+    during = [result.id[result.frame == f] for f in gap]
+    assert all(label in ids for ids in during)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_hidden_pedestrian_is_lost_or_relabelled_without_occlusion(seed):
+    scene = crossing_pair(seed)
+    gap = gap_frames(scene)
+    result = Tracker(TrackerConfig(occlusion="none")).run(scene.detections, scene.frames)
+    label = track_of(scene, result, 1, [gap[0] - 20])[0]
+    after = track_of(scene, result, 1, [gap[-1] + 30])[0]
+    lost = any(label not in result.id[result.frame == f] for f in gap)
+    assert label > 0 and (lost or after != label)
+
+
+def test_existence_in_unit_interval_and_labels_unique():
+    scene = crowd_scene(Crowd(people=20, frames=160), seed=3)
+    tracker = Tracker(TrackerConfig(occlusion="measurement-wise", capacity=512,
+                                    max_labels=24))
+    serial_of_id = {}
+    for rows in scene.detections.frame_slices(scene.frames)[::2]:
+        tracks = tracker.step(scene.detections.box[rows], scene.detections.score[rows])
+        f = tracker.filter
+        r = f.existence()
+        assert (r >= 0).all() and (r <= 1).all()
+        assert (f.mass[:f.n] >= 0).all() and f.n <= 512 and f.slot_used.sum() <= 24
+        labelled = f.label[:f.n][f.label[:f.n] >= 0]
+        assert np.bincount(labelled).max(initial=0) <= 16
+        assert (f.det[:f.n] >= 0).all() and (f.det[:f.n] <= 1).all()
+        assert len(np.unique(tracks.ids)) == len(tracks.ids)
+        assert ((tracks.existence > 0.5) & (tracks.existence <= 1)).all()
+        shown = np.flatnonzero(f.slot_used & (r > 0.5))
+        assert sorted(tracker._report_id[shown]) == tracks.ids.tolist()
+        for slot in shown:
+            track_id, serial = int(tracker._report_id[slot]), int(f.slot_serial[slot])
+            assert serial_of_id.setdefault(track_id, serial) == serial
+    assert len(serial_of_id) >= 20
+
+
+def test_run_is_byte_for_byte_repeatable(tmp_path):
+    outputs = []
+    for attempt in range(2):
+        scene = crowd_scene(Crowd(people=15, frames=120), seed=7)
+        result = Tracker(TrackerConfig(occlusion="object-wise")).run(scene.detections,
+                                                                     scene.frames)
+        path = tmp_path / f"run{attempt}.txt"
+        write_mot(path, result.frame, result.id, result.box, result.existence)
+        outputs.append(path.read_bytes())
+    assert outputs[0] == outputs[1] and len(outputs[0]) > 1000
+
+
+def test_missed_object_existence_follows_the_miss_term():
+    """One object, well tracked; then its detection is gone and a much bigger box in front
+    hides it. Existence must follow r' = sum w P_S miss / (1 - sum w P_S + sum w P_S miss),
+    miss_k = 1 - d_k + d_k o_k q_k with d, o predicted and q from the box geometry."""
+    config = TrackerConfig(occlusion="measurement-wise")
+    tracker = Tracker(config)
+    person = np.array([[900.0, 400.0, 40.0, 120.0]])
+    for step in range(12):
+        tracker.step(person + [[4.0 * step, 0, 0, 0]])
+    f = tracker.filter
+    mine = f.label[:f.n] == np.flatnonzero(f.slot_used)[0]
+    mass, det, occ = f.mass[:f.n][mine], f.det[:f.n][mine], f.occ[:f.n][mine]
+    mean, cov = f.motion.predict(f.mean[:f.n][mine], f.cov[:f.n][mine])
+    det = f.detectability.predict(det, config.dt)
+    occ = f.occludability.predict(occ, config.dt)
+    mass = mass * np.exp(-config.death_rate * config.dt)
+    wall = np.array([[800.0, 150.0, 300.0, 600.0]])
+    q = combine(BoxOcclusionGeometry()(f.measurement.predicted_edges(mean),
+                                       edges_from_ltwh(wall)))
+    miss = 1 - det + det * occ * q
+    expected = (mass * miss).sum() / (1 - mass.sum() + (mass * miss).sum())
+    assert 0.3 < expected < 0.999
+    tracker.step(wall)
+    r = tracker.filter.existence()
+    assert r.max() == pytest.approx(expected, rel=1e-6)
+
+
+class Wall:
+    """A fourth occlusion model, unknown to the filter: everything left of x = 960 is hidden."""
+
+    name = "wall"
+
+    def terms(self, ctx):
+        boxes = ctx.measurement_model.predicted_edges(ctx.means)
+        visible = (boxes[:, 0, 1] > 960).astype(float)
+        return OcclusionTerms(visible, np.zeros(len(ctx.means)))
+
+
+def test_a_new_occlusion_model_plugs_in_without_filter_changes():
+    """A person walks left into the wall's shadow, where detections stop."""
+    frames = [np.array([[1200.0 - 20 * k, 400.0, 40.0, 120.0]]) if k < 16 else np.zeros((0, 4))
+              for k in range(40)]
+    results = {}
+    for name, model in (("none", None), ("wall", Wall())):
+        config = TrackerConfig(occlusion="none", frame_step=1, fps=15)
+        results[name] = Tracker(config, occlusion=model).run(frames)
+    assert set(results["wall"].frame) == set(range(1, 41))
+    assert results["wall"].id.tolist() == [1] * 40
+    assert results["none"].frame.max() < 22
+
+
+def test_frames_between_tracked_ones_carry_tracks_along():
+    config = TrackerConfig(frame_step=3, fps=30)
+    frames = [np.array([[300.0 + 10 * k, 400.0, 40.0, 120.0, 0.9]]) for k in range(30)]
+    result = Tracker(config).run(frames)
+    assert result.frames == 30
+    left = {int(f): result.box[result.frame == f][0, 0] for f in result.frame}
+    # frames 1, 4, ..., 28 are tracked; 29 and 30 are frame 28's tracks moved on
+    assert left[30] - left[29] == pytest.approx(left[29] - left[28], abs=1e-9)
+    assert left[29] - left[28] == pytest.approx(10.0, abs=1.5)
+
+
+def test_step_rejects_bad_boxes():
+    tracker = Tracker()
+    with pytest.raises(ValueError, match="shape"):
+        tracker.step(np.zeros((3, 5)))
+    with pytest.raises(ValueError, match="NaN"):
+        tracker.step(np.array([[1.0, 2.0, np.nan, 4.0]]))
+    with pytest.raises(ValueError, match="negative"):
+        tracker.step(np.array([[1.0, 2.0, -3.0, 4.0]]))
+    assert len(tracker.step(np.zeros((0, 4)))) == 0
+
+
+def test_config_defaults_follow_the_paper():
+    assert TrackerConfig(occlusion="none").stationary_detectability == 0.9
+    c = TrackerConfig()
+    assert (c.stationary_detectability, c.capacity, c.max_labels, c.edge_std) == \
+        (0.93, 2048, 72, 12.0)
+    assert (c.occludability, c.occludability_ratio, c.report_existence) == (0.8, 0.8, 0.5)
+    assert c.dt == pytest.approx(1 / 15)
+
+
+def test_config_from_toml(tmp_path):
+    path = tmp_path / "tracker.toml"
+    path.write_text('occlusion = "object-wise"\nimage_size = [1280, 720]\ncapacity = 512\n'
+                    'edge_std = 8\n')
+    c = TrackerConfig.from_toml(path, frame_step=1)
+    assert (c.occlusion, c.image_size, c.capacity, c.edge_std, c.frame_step) == \
+        ("object-wise", (1280.0, 720.0), 512, 8.0, 1)
+
+
+@pytest.mark.parametrize("text,message", [
+    ("edge_sd = 3\n", "unknown setting 'edge_sd'"),
+    ("capacity = 2.5\n", "capacity must be an integer"),
+    ("image_size = [1, 2, 3]\n", "image_size must be a pair"),
+    ('occlusion = "grid"\n', "occlusion must be one of"),
+    ("report_existence = 1.5\n", "report_existence must be a probability"),
+    ("edge_std = 0\n", "edge_std must be a positive number"),
+    ("edge_std = \n", "not valid TOML"),
+])
+def test_config_errors_name_the_file(tmp_path, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(OcctrackError, match=message) as err:
+        TrackerConfig.from_toml(path)
+    assert str(err.value).startswith(f"{path}: ")
