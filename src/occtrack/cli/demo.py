@@ -6,14 +6,13 @@ import argparse
 import json
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-from occtrack.errors import OcctrackError
 from occtrack.metrics.gospa import gospa, iou
 from occtrack.scenarios.pedestrians import Crowd, Scene, crowd_scene
 from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig, TrackResult
+from occtrack.viz.frame import check_new
 
 NAME = "demo"
 HELP = "track a built-in synthetic street scene with none, object-wise and measurement-wise " \
@@ -111,11 +110,7 @@ def detector_figures(scene: Scene) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     if args.figure:
-        figure = Path(args.figure)
-        if figure.exists() and not args.force:
-            raise OcctrackError("exists already; pass --force to overwrite it", str(figure))
-        if not figure.parent.is_dir():
-            raise OcctrackError("folder does not exist", str(figure.parent))
+        check_new(args.figure, args.force)
     crowd = Crowd(people=args.people, frames=args.frames)
     scene = crowd_scene(crowd, seed=args.seed)
     results, scores = {}, {}
@@ -192,7 +187,7 @@ def _window(scene: Scene, frame: int) -> tuple[float, float, float, float]:
 
 
 def _draw(path: str, scene: Scene, results: dict, frame: int) -> None:
-    from occtrack.viz.demo import draw_panels
+    from occtrack.viz.frame import draw_panels
 
     t = scene.truth.frame == frame
     d = scene.detections.frame == frame

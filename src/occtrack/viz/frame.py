@@ -1,6 +1,6 @@
-"""One image frame drawn as boxes on a blank canvas of the image size: ground truth,
-detections and tracks with their labels. No video is needed, so MOT17 pictures can be drawn
-from the text files alone."""
+"""Image frames drawn as boxes on a blank canvas of the image size: ground truth (grey),
+detections (dashed magenta) and tracks (blue, with their labels), one panel per tracker side by
+side. No video is needed, so MOT17 pictures can be drawn from the text files alone."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from occtrack.errors import OcctrackError
 
 
 def check_new(path: str | Path, overwrite: bool) -> Path:
+    """The path of a figure about to be written: refuses to replace a file unless asked."""
     path = Path(path)
     if path.exists() and not overwrite:
         raise OcctrackError("exists already; pass --force to overwrite it", str(path))
@@ -20,44 +21,54 @@ def check_new(path: str | Path, overwrite: bool) -> Path:
     return path
 
 
-def draw_frame(path: str | Path, image_size: tuple[float, float], title: str = "",
-               truth: np.ndarray | None = None, detections: np.ndarray | None = None,
-               track_boxes: np.ndarray | None = None, track_ids: np.ndarray | None = None,
-               overwrite: bool = False) -> None:
-    """Boxes are (n, 4) left, top, width, height in px; the y axis points down as in images."""
-    path = check_new(path, overwrite)
+def _panel(ax, image_size, window, truth, detections, track_ids, track_boxes, title) -> None:
+    from matplotlib.patches import Rectangle
+
+    W, H = image_size
+    ax.add_patch(Rectangle((0, 0), W, H, facecolor="#f4f4f4", edgecolor="black", lw=0.8))
+    for box in truth:
+        ax.add_patch(Rectangle(box[:2], box[2], box[3], fill=False, ec="0.6", lw=0.8))
+    for box in detections:
+        ax.add_patch(Rectangle(box[:2], box[2], box[3], fill=False, ec="#d6249f", lw=1.2,
+                               ls="--"))
+    for label, box in zip(track_ids, track_boxes, strict=True):
+        ax.add_patch(Rectangle(box[:2], box[2], box[3], fill=False, ec="#1f4fd1", lw=1.6))
+        if window[0] <= box[0] <= window[2] and window[1] <= box[1] - 4 <= window[3]:
+            ax.text(box[0], box[1] - 4, str(int(label)), color="#1f4fd1", fontsize=8,
+                    va="bottom", ha="left", clip_on=True)
+    ax.set_xlim(window[0], window[2])
+    ax.set_ylim(window[3], window[1])
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_title(title, fontsize=10)
+
+
+def draw_panels(path: str | Path, image_size: tuple[float, float], panels: list[dict],
+                window: tuple[float, float, float, float] | None = None,
+                caption: str = "") -> None:
+    """Save panels side by side as a PNG; each panel is a dict with truth, detections,
+    track_ids, track_boxes ((n, 4) left, top, width, height) and title. `window` (left, top,
+    right, bottom) crops every panel to one part of the image."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Rectangle
 
-    width, height = image_size
-    fig, ax = plt.subplots(figsize=(12, 12 * height / width + 0.6))
-    ax.add_patch(Rectangle((0, 0), width, height, fc="0.97", ec="0.6"))
-    legend = []
-    for boxes, style, label in (
-            (truth, {"ec": "0.55", "lw": 1.0, "ls": "--"}, "ground truth"),
-            (detections, {"ec": "tab:pink", "lw": 1.6}, "detections"),
-            (track_boxes, {"ec": "tab:blue", "lw": 2.0}, "tracks")):
-        if boxes is None:
-            continue
-        for l, t, w, h in np.asarray(boxes, dtype=float).reshape(-1, 4):
-            ax.add_patch(Rectangle((l, t), w, h, fill=False, **style))
-        legend.append(Rectangle((0, 0), 1, 1, fill=False, label=f"{label} ({len(boxes)})",
-                                **style))
-    if track_boxes is not None and track_ids is not None:
-        for (l, t, _, _), i in zip(np.asarray(track_boxes).reshape(-1, 4), track_ids,
-                                   strict=True):
-            ax.text(l, t - 4, str(int(i)), color="tab:blue", fontsize=7, va="bottom")
-    ax.set_xlim(0, width)
-    ax.set_ylim(height, 0)
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    if legend:
-        ax.legend(handles=legend, loc="upper right", fontsize=8, framealpha=0.9)
-    ax.set_title(title, fontsize=11)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    window = window or (0.0, 0.0, *image_size)
+    aspect = (window[3] - window[1]) / (window[2] - window[0])
+    fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 6 * aspect + 0.8),
+                             squeeze=False)
+    for ax, panel in zip(axes[0], panels, strict=True):
+        _panel(ax, image_size, window, **{k: panel.get(k, np.zeros((0, 4))) for k in
+                                  ("truth", "detections", "track_boxes")},
+               track_ids=panel.get("track_ids", np.zeros(0)), title=panel.get("title", ""))
+    if caption:
+        fig.text(0.5, 0.02, caption, ha="center", fontsize=8)
+    fig.tight_layout(rect=(0, 0.05 if caption else 0, 1, 1))
+    try:
+        fig.savefig(path, dpi=110)
+    except OSError as err:
+        raise OcctrackError(f"cannot write the figure: {err.strerror}", str(path)) from None
+    finally:
+        plt.close(fig)

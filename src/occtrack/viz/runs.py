@@ -24,8 +24,10 @@ def plot_gospa_per_frame(path: str | Path, series: dict[str, np.ndarray], title:
                                                       "tab:green"), strict=False):
         frames = np.arange(1, len(values) + 1)
         ax.plot(frames, values, color=color, alpha=0.15, lw=0.6)
-        ax.plot(frames, np.convolve(values, kernel, mode="same"), color=color, lw=1.6,
-                label=f"{name} (total {values.sum():.0f})")
+        if len(values) >= window:
+            ax.plot(frames[window // 2: window // 2 + len(values) - window + 1],
+                    np.convolve(values, kernel, mode="valid"), color=color, lw=1.6,
+                    label=f"{name} (total {values.sum():.0f})")
     ax.set_xlabel("frame")
     ax.set_ylabel("GOSPA (c = 1, 1 - IoU)")
     ax.set_title(title, fontsize=11)
