@@ -64,6 +64,28 @@ def test_measurement_wise_hidden_term_from_visible_detections():
     np.testing.assert_array_equal(empty.hidden, [0.0, 0.0])
 
 
+def test_measurement_wise_seen_hidden_uses_the_other_detections_only():
+    """h_j: how surely the other detections would have hidden detection j, combined as
+    independent occluders. A detection never hides itself (its own bottom gap of 0 would give
+    0.1 / 0.35 on the ramp)."""
+    detections = np.array([A, edges(5, 15, 0, 20), edges(12, 22, 0, 12), edges(20, 30, 0, 13),
+                           edges(50, 60, 0, 10)])
+    h = MeasurementWise().seen_hidden(detections)
+    third_by_second = 2 * (3 * 12) / (10 * 12)  # bottom 8 px lower: ramp at 1
+    third_by_fourth = 2 * (2 * 12) / (10 * 12) * (1 / 13 + 0.1) / 0.35
+    fourth_by_third = 2 * (2 * 12) / (10 * 13) * (-1 / 12 + 0.1) / 0.35
+    np.testing.assert_allclose(h, [
+        1.0,  # A: half covered by the second, whose bottom is far lower
+        0.0,  # the second: every other bottom is higher
+        1 - (1 - third_by_second) * (1 - third_by_fourth),
+        fourth_by_third,
+        0.0,  # overlaps nothing
+    ], atol=1e-12)
+    terms = MeasurementWise().terms(context(states(A), [0], [1.0], detections))
+    np.testing.assert_allclose(terms.seen_hidden, h)
+    np.testing.assert_array_equal(MeasurementWise().seen_hidden(detections[:1]), [0.0])
+
+
 def test_object_wise_uses_other_objects_mean_boxes_weighted_by_existence():
     """Object 0 (two components) sits behind object 1 (r = 0.6); object 2 (r = 0.05) is
     below the 0.1 existence floor; the Poisson component (owner -1) is hidden by all."""

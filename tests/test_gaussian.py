@@ -80,6 +80,31 @@ def test_predict_equals_F_P_Ft_plus_Q():
             np.testing.assert_allclose(P2[k, b], F @ covs[k, b] @ F.T + Q)
 
 
+def test_velocity_relaxing_to_zero_travels_v_tau_and_settles_at_stationary_spread():
+    """Ornstein-Uhlenbeck velocity: after t seconds unseen the centre has moved
+    v0 tau (1 - exp(-t / tau)) and the velocity variance tends to q_v^2 tau / 2; a time
+    constant far beyond the step is the constant-velocity model."""
+    tau, dt, qv = 1.5, 0.1, 40.0
+    motion = ConstantVelocity(dt=dt, position_noise=3.0, velocity_noise=qv, size_noise=1.0,
+                              velocity_time=tau)
+    mean = np.zeros((1, 2, 3))
+    mean[0, :, 1] = [30.0, -12.0]
+    cov = np.tile(np.eye(3), (1, 2, 1, 1))
+    for _ in range(25):
+        mean, cov = motion.predict(mean, cov)
+    v0, t = np.array([30.0, -12.0]), 25 * dt
+    np.testing.assert_allclose(mean[0, :, 0], v0 * tau * (1 - np.exp(-t / tau)))
+    np.testing.assert_allclose(mean[0, :, 1], v0 * np.exp(-t / tau))
+    for _ in range(500):
+        mean, cov = motion.predict(mean, cov)
+    assert cov[0, 0, 1, 1] == pytest.approx(qv**2 * tau / 2, rel=1e-9)
+    slow = ConstantVelocity(dt, 3.0, qv, 1.0, velocity_time=1e9)
+    plain = ConstantVelocity(dt, 3.0, qv, 1.0)
+    np.testing.assert_allclose(slow.F, plain.F, atol=1e-8)
+    np.testing.assert_allclose(slow.Q, plain.Q, rtol=1e-6)
+    assert plain.F[1, 1] == 1.0 and plain.F[0, 1] == dt
+
+
 def test_updated_covariances_stay_symmetric_positive_definite():
     rng = np.random.default_rng(4)
     means, covs = random_components(rng, 200)

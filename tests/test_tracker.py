@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -129,6 +131,60 @@ def test_missed_object_existence_follows_the_miss_term():
     assert r.max() == pytest.approx(expected, rel=1e-6)
 
 
+def test_a_detection_where_it_could_have_been_hidden_weighs_occludability():
+    """Measurement-wise occlusion with occludability: a detection z_j seen where the other
+    detections would hide an occludable measurement with probability h_j came from a source
+    that was not occludable or escaped, so each hit term carries 1 - o_k h_j (clutter:
+    1 - o h_j with the stationary o) and P(O = 1 | hit) = o (1 - h_j) / (1 - o h_j).
+    One tracked object, then its detection beside a box in front that covers a quarter of it:
+    the existence and the hit child's occludability must follow these sums exactly."""
+    config = TrackerConfig(occlusion="measurement-wise")
+    tracker = Tracker(config)
+    person = np.array([[900.0, 400.0, 40.0, 120.0]])
+    for step in range(12):
+        tracker.step(person + [[4.0 * step, 0, 0, 0]])
+    seen = np.array([[964.0, 400.0, 40.0, 120.0], [994.0, 150.0, 300.0, 600.0]])
+    z = edges_from_ltwh(seen)
+    h = combine(BoxOcclusionGeometry()(z[:1], z[1:]))[0]
+    assert h == pytest.approx(0.5, abs=0.01)  # 10 of 40 px covered, gain 2, bottom far lower
+
+    f = copy.deepcopy(tracker.filter)  # the prior of the next update, computed separately
+    f._predict()
+    f._add_births()
+    n = f.n
+    mass, det, occ, label = f.mass[:n], f.det[:n], f.occ[:n], f.label[:n]
+    mine = label == np.flatnonzero(f.slot_used)[0]
+    poisson = label < 0
+    boxes = f.measurement.predicted_edges(f.mean[:n])
+    q = combine(BoxOcclusionGeometry()(boxes, z))
+    miss = 1 - det + det * occ * q
+    hidden_z = np.array([h, 0.0])
+    lik = np.exp(f.measurement.loglik(f.mean[:n], f.cov[:n], z, f.measurement.observed(z)))
+    hit = mass[:, None] * det[:, None] * (1 - occ[:, None] * hidden_z) * lik
+    clutter = config.clutter_density * (1 - config.occludability * hidden_z)
+    new = clutter + hit[poisson].sum(axis=0)
+    r, miss_sum = mass[mine].sum(), (mass * miss)[mine].sum()
+    odds = hit[mine].sum(axis=0) / new  # the object against clutter or a new object
+    total = 1 - r + miss_sum + odds.sum()
+    expected_r = (miss_sum + odds.sum()) / total
+    assert odds[0] / total > 0.9  # the object takes its detection
+    share = hit[mine, 0] / hit[mine, 0].sum()
+    o = occ[mine]
+    expected_o = (share * o * (1 - h) / (1 - o * h)).sum()
+
+    tracker.step(seen)
+    g = tracker.filter
+    slot = np.flatnonzero(g.slot_used & (g.existence() > 0.5))
+    assert len(slot) == 1
+    assert g.existence()[slot[0]] == pytest.approx(expected_r, rel=1e-6)
+    comps = np.flatnonzero((g.label[:g.n] == slot[0]) & (g.det[:g.n] > 1 - 1e-12))
+    # (each object keeps its 16 heaviest components, rescaled: the hit share moves a little)
+    assert g.mass[comps].sum() == pytest.approx(odds[0] / total, rel=1e-4)
+    hit_o = (g.mass[comps] * g.occ[comps]).sum() / g.mass[comps].sum()
+    assert hit_o == pytest.approx(expected_o, rel=1e-6)
+    assert hit_o < o.mean() - 0.1  # seen where it could have been hidden: less occludable
+
+
 class Wall:
     """A fourth occlusion model, unknown to the filter: everything left of x = 960 is hidden."""
 
@@ -182,15 +238,17 @@ def test_config_defaults_follow_the_paper():
         (0.93, 2048, 72, 12.0)
     assert (c.occludability, c.occludability_ratio, c.report_existence) == (0.8, 0.8, 0.5)
     assert c.dt == pytest.approx(1 / 15)
+    assert c.velocity_time == float("inf")  # constant velocity
 
 
 def test_config_from_toml(tmp_path):
     path = tmp_path / "tracker.toml"
     path.write_text('occlusion = "object-wise"\nimage_size = [1280, 720]\ncapacity = 512\n'
-                    'edge_std = 8\n')
+                    'edge_std = 8\nvelocity_time = 1\n')
     c = TrackerConfig.from_toml(path, frame_step=1)
     assert (c.occlusion, c.image_size, c.capacity, c.edge_std, c.frame_step) == \
         ("object-wise", (1280.0, 720.0), 512, 8.0, 1)
+    assert c.velocity_time == 1.0 and Tracker(c).filter.motion.F[1, 1] < 1
 
 
 @pytest.mark.parametrize("text,message", [
@@ -200,6 +258,7 @@ def test_config_from_toml(tmp_path):
     ('occlusion = "grid"\n', "occlusion must be one of"),
     ("report_existence = 1.5\n", "report_existence must be a probability"),
     ("edge_std = 0\n", "edge_std must be a positive number"),
+    ("velocity_time = 0\n", "velocity_time must be a positive number of seconds"),
     ("edge_std = \n", "not valid TOML"),
 ])
 def test_config_errors_name_the_file(tmp_path, text, message):

@@ -10,18 +10,27 @@ sum of its components' masses, r_i = sum_{k in i} w_k, and its density their nor
 
 One step (predict, birth, update):
 
-    occlusion   v_k, q_k from the occlusion model; with occludability o_k only an occludable
-                measurement can be hidden, so P_D = d_k (1 - o_k + o_k v_k) and
+    occlusion   v_k, q_k (and h_j) from the occlusion model; with occludability o_k only an
+                occludable measurement can be hidden, so P_D = d_k (1 - o_k + o_k v_k) and
                 miss_k = 1 - P_D + d_k o_k v_k q_k                       (paper sec. IV)
-    hit         l_kj = w_k P_D p(z_j | x_k)
+    hit         l_kj = w_k d_k (1 - o_k + o_k v_k (1 - h_j)) p(z_j | x_k)
     objects     L_ij = sum_{k in i} l_kj,  miss_i = 1 - r_i + sum_{k in i} w_k miss_k
-    new         L_0j = kappa p_F(z_j) + sum_{k Poisson} l_kj
+    new         L_0j = kappa p_F(z_j) (1 - o h_j) + sum_{k Poisson} l_kj
     association p_hit, p_miss, p_new from loopy belief propagation (Williams and Lau)
     children    miss child of k in i:  w_k miss_k p_miss_i / miss_i  (state kept, d and o
                 updated by Bayes), hit child of k by z_j: l_kj p_hit_ij / L_ij (Kalman update,
-                d = 1); Poisson components: miss child w_k miss_k, hit child l_kj p_new_j / L_0j,
-                which together are the new Bernoulli of measurement j, existence
-                p_new_j (L_0j - kappa p_F) / L_0j.
+                d = 1, o updated by Bayes); Poisson components: miss child w_k miss_k, hit child
+                l_kj p_new_j / L_0j, which together are the new Bernoulli of measurement j,
+                existence p_new_j (L_0j - kappa p_F (1 - o h_j)) / L_0j.
+
+h_j is measurement-wise occlusion's term for a detection that was seen: the probability that
+the other visible detections would have hidden an occludable measurement at z_j. Only a
+source that was not occludable, or escaped, gives z_j, hence the factor 1 - o h_j (o_k for an
+object, the stationary occludability o for clutter). Without the occludability feature this
+factor would be one constant for every source and cancel (the paper drops it, and so did the
+authors' prototype); with it, it decides between an object seen in front (low o_k) and a
+hidden, occludable one that would otherwise claim the detections of the people in front of
+it at no cost.
 
 Then the heaviest `capacity` children are kept (lighter than `prune_mass` dropped); each
 Bernoulli keeps at most its `max_components_per_object` heaviest, rescaled so that its existence
@@ -59,7 +68,8 @@ class GaussianMixturePMB:
         self.config = c
         self.occlusion = occlusion
         self.dt = c.dt
-        self.motion = ConstantVelocity(c.dt, c.position_noise, c.velocity_noise, c.size_noise)
+        self.motion = ConstantVelocity(c.dt, c.position_noise, c.velocity_noise, c.size_noise,
+                                       c.velocity_time)
         self.measurement = BoxMeasurement(c.image_size, c.edge_std, c.border_margin)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
@@ -186,10 +196,17 @@ class GaussianMixturePMB:
         pd = det * (1.0 - occ + occ * v)
         miss = 1.0 - pd + det * occ * v * q
 
+        seen_hidden = np.zeros(M) if terms.seen_hidden is None else np.clip(
+            terms.seen_hidden, 0.0, 1.0)
         hit = np.zeros((n, M))
         if M:
             log_hit = self.measurement.loglik(mean, cov, z, observed)
-            log_hit += np.log(np.maximum(mass * pd, 1e-300))[:, None]
+            if seen_hidden.any():
+                seen = det[:, None] * (1.0 - occ[:, None]
+                                       + (occ * v)[:, None] * (1.0 - seen_hidden))
+                log_hit += np.log(np.maximum(mass[:, None] * seen, 1e-300))
+            else:
+                log_hit += np.log(np.maximum(mass * pd, 1e-300))[:, None]
             # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
             # which are slow to compute with, out of the arrays
             np.exp(log_hit, out=hit, where=log_hit > LOG_FLOOR)
@@ -211,7 +228,7 @@ class GaussianMixturePMB:
             miss_mass[rows[starts]] = np.add.reduceat(mass * miss, starts)
         r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
         clutter = c.clutter_density * np.clip(scores, c.score_floor, 1.0) ** (
-            -c.clutter_score_power)
+            -c.clutter_score_power) * (1.0 - c.occludability * seen_hidden)
         w_new = clutter + L_hit[A]
 
         marg = lbp_marginals(L_hit[:A], miss_obj, w_new, tol=c.lbp_tolerance,
@@ -239,11 +256,12 @@ class GaussianMixturePMB:
         d, o, vv, qq, mm = det[parent], occ[parent], v[parent], q[parent], miss[parent]
         is_hit = j >= 0
         # Bayes for the features. Missed: P(D=1 | miss) = d o (1 - v + v q) / miss and
-        # P(O=1 | miss) = o (1 - d + d (1 - v + v q)) / miss. Hit: D = 1 and
-        # P(O=1 | hit) = o v / (1 - o + o v).
+        # P(O=1 | miss) = o (1 - d + d (1 - v + v q)) / miss. Hit by z_j: D = 1 and
+        # P(O=1 | hit) = o v (1 - h_j) / (1 - o + o v (1 - h_j)).
         hidden_if_occludable = 1.0 - vv + vv * qq
         new_det = np.where(is_hit, 1.0, d * o * hidden_if_occludable / np.maximum(mm, 1e-300))
-        seen_o = o * vv / np.maximum(1.0 - o + o * vv, 1e-300)
+        escaped = vv * (1.0 - seen_hidden[np.maximum(j, 0)]) if M else vv
+        seen_o = o * escaped / np.maximum(1.0 - o + o * escaped, 1e-300)
         missed_o = o * (1.0 - d + d * hidden_if_occludable) / np.maximum(mm, 1e-300)
         new_occ = np.where(is_hit, seen_o, missed_o)
         h = np.flatnonzero(is_hit)

@@ -12,7 +12,8 @@ occludability s = 0.8, h = 0.8).
 Detectability D: a component with D on yields a measurement unless occluded, so P_D = p.
 Occludability O: only a measurement from an object with O on can be occluded; an object that
 stays undetected where nothing could hide it loses occludability, one that is missed where it
-could be hidden gains it, which keeps the order of occlusion stable.
+could be hidden gains it, and one detected where the other detections would have hidden it
+loses it, which keeps the order of occlusion stable.
 """
 
 from __future__ import annotations

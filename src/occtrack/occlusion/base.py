@@ -2,14 +2,18 @@
 
 Occlusion changes only each component's detection and miss terms (paper section IV):
 
-    hit   l_kj = w_k P_D(x_k) v_k p(z_j | x_k)
+    hit   l_kj = w_k P_D(x_k) v_k (1 - h_j) p(z_j | x_k)
     miss  m_k  = w_k (1 - P_D(x_k) v_k + P_D(x_k) v_k q_k)
 
 v_k is the probability that component k's object is visible (object-wise occlusion, static
 approximation: P_D(x) <- P_D(x) P(v | x), paper eq. "misstermOWO") and q_k the probability that
 its would-be measurement is hidden by the measurements that were seen (measurement-wise
-occlusion: the integral of p(z | x_k) p(not v | z, Z^V), paper eq. "new_individual_MM").
-`none` returns v = 1, q = 0; object-wise returns q = 0; measurement-wise returns v = 1.
+occlusion: the integral of p(z | x_k) p(not v | z, Z^V), paper eq. "new_individual_MM"); h_j,
+optional, is the probability that the other visible measurements would hide a measurement at
+z_j (measurement-wise; it matters only for sources that may or may not be occludable, see
+`occtrack.filters.gmpmb`). `none` returns v = 1, q = 0; object-wise returns q = 0; measurement-
+wise returns v = 1. (With an occludability o_k, the filter applies v, q and h to the occludable
+part only.)
 """
 
 from __future__ import annotations
@@ -41,10 +45,17 @@ class OcclusionContext:
 
 @dataclass(frozen=True)
 class OcclusionTerms:
-    """visible[k] = v_k and hidden[k] = q_k, both in [0, 1], one per component."""
+    """visible[k] = v_k and hidden[k] = q_k, both in [0, 1], one per component.
+
+    seen_hidden[j] = h_j, optional, one per visible measurement: the probability that an
+    occludable measurement where z_j is would have been hidden by the other visible
+    measurements (measurement-wise occlusion). z_j was seen, so its source was either not
+    occludable or escaped: with occludability o_k the hit term carries 1 - o_k h_j. None means
+    0 (a measurement is never hidden by the others, or occlusion is object-wise)."""
 
     visible: np.ndarray
     hidden: np.ndarray
+    seen_hidden: np.ndarray | None = None
 
 
 class OcclusionModel(Protocol):

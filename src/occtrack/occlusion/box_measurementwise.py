@@ -8,6 +8,13 @@ the chance that its own would-be measurement was hidden by the visible detection
 non-maximum suppression does exactly this). The integral is evaluated at the component's
 predicted box, the mean of p(z | x_k), as the authors' prototype did. No inter-object term
 enters, so under restricted occlusion this is exact apart from that point evaluation.
+(Integrating over the box's uncertainty by cubature instead was measured on MOT17-04 with
+three detector seeds: no better, GOSPA within 0.3 % and IDF1 about 0.01 lower, so the point
+evaluation stays.)
+
+Each detection that was seen also gets h_j, the same probability for a measurement at z_j
+hidden by the other detections (never by itself): a source that can be occluded produced z_j
+only if it escaped, so the filter weighs hits by 1 - o h_j (`occtrack.filters.gmpmb`).
 """
 
 from __future__ import annotations
@@ -25,9 +32,17 @@ class MeasurementWise:
         self.geometry = geometry or BoxOcclusionGeometry()
 
     def terms(self, ctx: OcclusionContext) -> OcclusionTerms:
-        k = len(ctx.means)
-        if k == 0 or len(ctx.measurements) == 0:
-            return OcclusionTerms(np.ones(k), np.zeros(k))
-        boxes = ctx.measurement_model.predicted_edges(ctx.means)
-        hidden = combine(self.geometry(boxes, ctx.measurements))
-        return OcclusionTerms(np.ones(k), hidden)
+        k, z = len(ctx.means), ctx.measurements
+        if len(z) == 0:
+            return OcclusionTerms(np.ones(k), np.zeros(k), np.zeros(0))
+        hidden = np.zeros(k)
+        if k:
+            boxes = ctx.measurement_model.predicted_edges(ctx.means)
+            hidden = combine(self.geometry(boxes, z))
+        return OcclusionTerms(np.ones(k), hidden, self.seen_hidden(z))
+
+    def seen_hidden(self, z: np.ndarray) -> np.ndarray:
+        """h_j: how surely the other visible measurements would have hidden z_j."""
+        p = self.geometry(z, z)
+        np.fill_diagonal(p, 0.0)
+        return combine(p)

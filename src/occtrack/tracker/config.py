@@ -48,6 +48,8 @@ class TrackerConfig:
     position_noise: float = 11.6  # process noise of box centres, px / sqrt(s)
     velocity_noise: float = 87.0  # of velocities, px / s / sqrt(s)
     size_noise: float = 7.7  # of half-sizes, px / sqrt(s)
+    velocity_time: float = math.inf  # s: velocities relax to 0 with this time constant
+    # (models.motion); inf: constant velocity, the paper's model
 
     death_rate: float = 0.075  # per second, objects inside the image
     exit_survival: float = 0.4  # per tracked frame, objects whose centre left the image
@@ -138,6 +140,9 @@ class TrackerConfig:
         for name, value in probabilities.items():
             if not (0.0 <= value <= 1.0):
                 raise ValueError(f"{name} must be a probability in [0, 1], not {value}")
+        if not self.velocity_time > 0:
+            raise ValueError(f"velocity_time must be a positive number of seconds (inf: "
+                             f"constant velocity), not {self.velocity_time}")
         if self.frame_step < 1:
             raise ValueError(f"frame_step must be at least 1, not {self.frame_step}")
         if self.max_labels < 1:
