@@ -17,6 +17,7 @@ COMMANDS = (
     "demo",
     "eval",
     "foursquare",
+    "lidar",
     "reproduce",
     "simulate_detections",
     "track",

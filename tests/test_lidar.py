@@ -1,0 +1,84 @@
+"""The separable lidar likelihood (paper section V) against simulated beams and quadrature."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from occtrack.cli import main
+from occtrack.lidar import (
+    BeamModel,
+    gaussian_likelihood_ratio,
+    likelihood_ratio,
+    regime,
+    simulate_beams,
+    update_bernoulli,
+)
+
+MODEL = BeamModel(p_d=0.8, sigma=0.5, clutter_rate=0.5, max_range=40.0)
+
+
+def test_density_of_the_nearest_return_matches_simulation():
+    """With an object at x the reported range has density L(z | x) kappa e^(-kappa z)."""
+    x, n = 15.0, 300_000
+    z = simulate_beams(x, MODEL, n, np.random.default_rng(7))
+    edges = np.linspace(0, 30, 61)
+    counts = np.histogram(z, edges)[0]
+    grid = np.linspace(0, 30, 60 * 200 + 1)
+    density = likelihood_ratio(grid, x, MODEL) * MODEL.kappa * np.exp(-MODEL.kappa * grid)
+    cum = np.concatenate([[0], np.cumsum((density[1:] + density[:-1]) / 2 * np.diff(grid))])
+    expected = n * np.diff(cum[::200])
+    se = np.sqrt(expected * (1 - expected / n))
+    assert np.all(np.abs(counts - expected) < 4.5 * se + 1)
+    no_return = np.mean(z >= MODEL.max_range)
+    p = (1 - MODEL.p_d) * np.exp(-MODEL.clutter_rate)
+    assert abs(no_return - p) < 4 * np.sqrt(p * (1 - p) / n)
+
+
+def test_three_regimes():
+    x = 20.0
+    assert likelihood_ratio(5.0, x, MODEL) == pytest.approx(1.0, abs=1e-9)
+    assert likelihood_ratio(x + 8 * MODEL.sigma, x, MODEL) == pytest.approx(1 - MODEL.p_d)
+    assert likelihood_ratio(MODEL.max_range, x, MODEL) == pytest.approx(1 - MODEL.p_d)
+    assert likelihood_ratio(x, x, MODEL) > 10
+    assert regime([10.0, 20.1, 30.0], 20.0, MODEL).tolist() == ["passed", "hit", "hidden"]
+
+
+@pytest.mark.parametrize("z", [8.0, 11.3, 12.0, 14.0, MODEL.max_range])
+def test_gaussian_closed_form_equals_quadrature(z):
+    mean, var = 12.0, 0.7**2
+    x = np.linspace(mean - 10, mean + 10, 40001)
+    pdf = np.exp(-0.5 * (x - mean) ** 2 / var) / np.sqrt(2 * np.pi * var)
+    f = likelihood_ratio(z, x, MODEL) * pdf
+    numeric = np.sum((f[1:] + f[:-1]) / 2 * np.diff(x))
+    assert gaussian_likelihood_ratio(z, mean, var, MODEL) == pytest.approx(numeric, rel=1e-6)
+
+
+def test_bernoulli_update_by_regime():
+    rng = np.random.default_rng(0)
+    particles = rng.normal(20.0, 0.3, 5000)
+    weights = np.full(5000, 1 / 5000)
+    r = 0.6
+    passed, _ = update_bernoulli(r, particles, weights, 25.0, MODEL)
+    hidden, w_hidden = update_bernoulli(r, particles, weights, 10.0, MODEL)
+    hit, w_hit = update_bernoulli(r, particles, weights, 20.2, MODEL)
+    assert passed == pytest.approx(r * 0.2 / (1 - r + r * 0.2), rel=1e-6)
+    assert hidden == pytest.approx(r, abs=1e-9)
+    np.testing.assert_allclose(w_hidden, weights, atol=1e-12)
+    g = float(gaussian_likelihood_ratio(20.2, 20.0, 0.3**2, MODEL))
+    assert hit == pytest.approx(r * g / (1 - r + r * g), rel=0.01)
+    assert hit > r
+    assert np.sum(w_hit * particles) > np.sum(weights * particles)
+
+
+def test_cli_prints_derived_and_simulated(capsys):
+    assert main(["lidar", "--samples", "20000"]) == 0
+    out = capsys.readouterr().out
+    assert "hidden" in out and "passed" in out and "no return: L = 1 - P_D = 0.100" in out
+
+
+def test_cli_rejects_bad_settings(capsys):
+    assert main(["lidar", "--p-d", "1.5"]) == 2
+    assert "p_d must lie in [0, 1]" in capsys.readouterr().err
+    assert main(["lidar", "--range", "80"]) == 2
+    assert "--range must lie inside" in capsys.readouterr().err
