@@ -19,6 +19,7 @@ COMMANDS = (
     "foursquare",
     "lidar",
     "reproduce",
+    "simulate",
     "simulate_detections",
     "track",
 )

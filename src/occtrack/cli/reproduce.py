@@ -12,6 +12,7 @@ DESCRIPTION = HELP + ". Each table has its own options: occtrack reproduce TABLE
 EXPERIMENTS = (
     "table1",
     "table2",
+    "table3",
 )
 
 

@@ -1,0 +1,59 @@
+"""Speed of the highway trackers: steps per second of each occlusion handler.
+
+Simulates the highway once (measurement-wise sensor, seed 1), keeps the scans, then times each
+tracker alone over the same steps (default 10,000, the paper's run length). The issue's budget
+is 30 s for 10,000 steps of one tracker; the authors' prototype needs about 300 s.
+
+    python benchmarks/bench_highway.py [--steps 10000] [--sensor measurement-wise]
+
+Timings are wall-clock on whatever else the machine is doing; run it on a quiet machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from occtrack.highway.config import SimulationConfig, TrackerConfig
+from occtrack.highway.occlusion import TRACKER_NAMES
+from occtrack.highway.simulate import simulate
+from occtrack.highway.tracker import HighwayTracker
+
+BUDGET = 30.0
+PROTOTYPE = 300.0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=10_000)
+    parser.add_argument("--sensor", default="measurement-wise",
+                        choices=("object-wise", "measurement-wise"))
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+
+    simulation = SimulationConfig()
+    start = time.perf_counter()
+    scans = [scan for _, scan in simulate(simulation, args.sensor, args.steps, args.seed)]
+    sim_seconds = time.perf_counter() - start
+    print(f"simulation ({args.sensor} sensor): {args.steps} steps in {sim_seconds:.2f} s "
+          f"({args.steps / sim_seconds:.0f} steps/s)")
+    config = TrackerConfig.matching(simulation)
+    print(f"tracker: {config.particles} particles per track, {config.undetected_particles} + "
+          f"{config.birth_particles} per lane for undetected cars")
+    for name in TRACKER_NAMES:
+        tracker = HighwayTracker(config, name, seed=args.seed)
+        start = time.perf_counter()
+        cpu = time.process_time()
+        for scan in scans:
+            tracker.step(scan)
+        wall = time.perf_counter() - start
+        cpu = time.process_time() - cpu
+        per_10k = wall * 10_000 / args.steps
+        print(f"{name:<20} {args.steps / wall:7.0f} steps/s  {1e3 * wall / args.steps:5.2f} ms/step"
+              f"  (cpu {1e3 * cpu / args.steps:5.2f})  10,000 steps: {per_10k:5.1f} s  "
+              f"= {per_10k / BUDGET:.2f} x budget, {PROTOTYPE / per_10k:.0f} x faster than the "
+              f"prototype")
+
+
+if __name__ == "__main__":
+    main()
