@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 
+from occtrack.cli.arguments import positive_int
 from occtrack.metrics.gospa import gospa, iou
 from occtrack.scenarios.pedestrians import Crowd, Scene, crowd_scene
 from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig, TrackResult
@@ -41,13 +42,6 @@ def non_negative_int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"{text} is negative")
-    return value
-
-
-def positive_int(text: str) -> int:
-    value = non_negative_int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text} must be at least 1")
     return value
 
 

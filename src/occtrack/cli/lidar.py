@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from occtrack.cli.arguments import positive_int, seed_int
 from occtrack.errors import OcctrackError
 from occtrack.lidar import BeamModel, likelihood_ratio, regime, simulate_beams
 
@@ -34,9 +35,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--clutter-rate", type=float, default=0.2,
                         help="expected clutter returns per beam (0.2)")
     parser.add_argument("--max-range", type=float, default=50.0, help="sensor range, m (50)")
-    parser.add_argument("--samples", type=int, default=400_000,
+    parser.add_argument("--samples", type=positive_int, default=400_000,
                         help="simulated beams per case (400000)")
-    parser.add_argument("--seed", type=int, default=0, help="simulation seed (0)")
+    parser.add_argument("--seed", type=seed_int, default=0, help="simulation seed (0)")
     parser.add_argument("--figure", metavar="PNG", type=Path, help="draw L(z | x) over the beam")
     parser.add_argument("--force", action="store_true", help="overwrite an existing figure")
 

@@ -13,6 +13,7 @@ import time
 from collections import deque
 from pathlib import Path
 
+from occtrack.cli.arguments import positive_int, seed_int
 from occtrack.progress import progress, summary
 
 NAME = "simulate"
@@ -37,26 +38,6 @@ births), as in the paper.
 Prints GOSPA per step (the paper's figure), its localisation / missed / false split and GOSPA
 per true car, then a one-line summary. --figure draws the last step; --animation the last
 --animation-steps steps as a GIF (5 steps per second, real time)."""
-
-
-def positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text} must be at least 1")
-    return value
-
-
-def seed_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text} must be >= 0")
-    return value
 
 
 def configure(parser: argparse.ArgumentParser) -> None:

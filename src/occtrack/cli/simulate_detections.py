@@ -7,6 +7,7 @@ import time
 import tomllib
 from pathlib import Path
 
+from occtrack.cli.arguments import seed_int
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo, write_mot
 from occtrack.scenarios.detector import (
@@ -52,7 +53,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="MOTChallenge ground truth (frame,id,l,t,w,h,flag,class,visibility)")
     parser.add_argument("-o", "--output", metavar="DET_FILE", type=Path, required=True,
                         help="detection file to write")
-    parser.add_argument("--seed", type=int, default=0, metavar="S",
+    parser.add_argument("--seed", type=seed_int, default=0, metavar="S",
                         help="random seed (default 0); same seed, same file")
     parser.add_argument("--image-size", type=_image_size, metavar="WxH",
                         help="image size when there is no seqinfo.ini (default 1920x1080)")

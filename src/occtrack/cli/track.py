@@ -7,6 +7,7 @@ import re
 import time
 from pathlib import Path
 
+from occtrack.cli.arguments import positive_int
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo, write_mot
 from occtrack.progress import summary
@@ -43,16 +44,6 @@ def image_size(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(f"{text!r} is not an image size; write WxH, "
                                          f"e.g. 1920x1080")
     return float(match[1]), float(match[2])
-
-
-def positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text} must be at least 1")
-    return value
 
 
 def configure(parser: argparse.ArgumentParser) -> None:

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from occtrack.cli.arguments import positive_int, seed_int
 from occtrack.errors import OcctrackError
 from occtrack.io.data import find_sequence
 from occtrack.io.mot import MotTable, read_mot, read_seqinfo
@@ -58,14 +59,14 @@ COLUMNS = (("mota", "MOTA", ".3f"), ("motp", "MOTP", ".3f"), ("idf1", "IDF1", ".
 
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--data", metavar="DIR", help="folder holding MOT17-04-FRCNN/")
-    parser.add_argument("--seed", type=int, default=0, help="detector simulator seed (0)")
+    parser.add_argument("--seed", type=seed_int, default=0, help="detector simulator seed (0)")
     parser.add_argument("--json", action="store_true",
                         help='print {"paper": {"none": {...}, ..., "norfair": {...}}, '
                              '"mot17": {...}} with the keys of `occtrack eval --json`')
     parser.add_argument("--no-norfair", action="store_true", help="leave the baseline out")
     parser.add_argument("--frame-figure", metavar="PNG", type=Path,
                         help="draw one frame: ground truth, detections, measurement-wise tracks")
-    parser.add_argument("--frame", type=int, default=None,
+    parser.add_argument("--frame", type=positive_int, default=None,
                         help="frame to draw (default: the one with most ground-truth people)")
     parser.add_argument("--gospa-figure", metavar="PNG", type=Path,
                         help="plot per-frame GOSPA of the three models (paper protocol)")

@@ -45,7 +45,7 @@ PAPER = {"object-wise": {"object-wise-expval": 4.94, "object-wise-grid": 4.79,
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    from occtrack.cli.simulate import positive_int
+    from occtrack.cli.arguments import positive_int
 
     parser.add_argument("--steps", type=positive_int, default=10000,
                         help="time steps per run (default 10000, as in the paper)")
