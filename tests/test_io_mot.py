@@ -39,7 +39,6 @@ def test_gt_columns_and_frame_slices(tmp_path):
     ("1,-1,0,0,5,5,1\n2,-1,a,0,5,5,1\n", 2, "column 3 is not a number"),
     ("1,-1,0,0,nan,5,1\n", 1, "column 5 is nan"),
     ("1,-1,0,0,-5,5,1\n", 1, "negative box size"),
-    ("2,-1,0,0,5,5,1\n1,-1,0,0,5,5,1\n", 2, "frame 1 comes after frame 2"),
     ("0,-1,0,0,5,5,1\n", 1, "below 1"),
 ])
 def test_bad_rows_are_named(tmp_path, text, line, message):
@@ -80,3 +79,11 @@ def test_seqinfo(tmp_path):
     (tmp_path / "seqinfo.ini").write_text("[Sequence]\nname=S\n")
     with pytest.raises(OcctrackError, match="malformed seqinfo.ini"):
         read_seqinfo(tmp_path)
+
+
+def test_detections_in_any_frame_order_keep_every_row(tmp_path):
+    text = "3,-1,0,0,5,5,1\n3,-1,9,0,5,5,0.5\n1,-1,1,0,5,5,1\n2,-1,2,0,5,5,1\n1,-1,4,0,5,5,1\n"
+    table = read_mot(write(tmp_path, text), "det")
+    assert len(table) == 5
+    slices = table.frame_slices()
+    assert [table.box[rows, 0].tolist() for rows in slices] == [[1.0, 4.0], [2.0], [0.0, 9.0]]

@@ -62,8 +62,9 @@ def _split(line: str) -> list[str]:
 
 
 def read_mot(path: str | os.PathLike, kind: str = "det") -> MotTable:
-    """Read a MOTChallenge file. `kind` is "det" (frames must not go backwards), "gt" or
-    "result" (any row order, as the benchmark ships them)."""
+    """Read a MOTChallenge file: "det", "gt" or "result". Rows may come in any frame order
+    (the MOT17 detection files do not keep it); every row is kept, and `frame_slices`
+    groups them by frame with a stable sort."""
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}")
     p = str(path)
@@ -78,7 +79,6 @@ def read_mot(path: str | os.PathLike, kind: str = "det") -> MotTable:
         raise OcctrackError("not a text file", p) from None
 
     rows: list[tuple] = []
-    last_frame = 0
     for number, raw in enumerate(lines, start=1):
         line = raw.strip().lstrip("\ufeff")
         if not line:
@@ -102,10 +102,6 @@ def read_mot(path: str | os.PathLike, kind: str = "det") -> MotTable:
             raise OcctrackError(f"frame {values[0]:g} is below 1 (frames are 1-based)", p, number)
         if values[4] < 0 or values[5] < 0:
             raise OcctrackError(f"negative box size {values[4]:g} x {values[5]:g}", p, number)
-        if kind == "det" and frame < last_frame:
-            raise OcctrackError(f"frame {frame} comes after frame {last_frame}: detection "
-                                f"files must be in frame order", p, number)
-        last_frame = max(last_frame, frame)
         score = values[6] if len(values) > 6 else 1.0
         cls = int(values[7]) if len(values) > 7 else -1
         vis = values[8] if len(values) > 8 else -1.0
