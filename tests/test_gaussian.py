@@ -119,21 +119,22 @@ def test_box_edges_round_trip_and_border_edges():
     edges = edges_from_ltwh(boxes)
     np.testing.assert_array_equal(edges[1], [[1900.0, 1920.0], [990.0, 1080.0]])
     np.testing.assert_array_equal(ltwh_from_edges(edges), boxes)
-    model = BoxMeasurement((1920, 1080), edge_std=12.0, border_margin=1.0)
+    model = BoxMeasurement((1920, 1080), edge_noise=0.075, border_margin=1.0)
     np.testing.assert_array_equal(model.observed(edges),
                                   [[[False, True], [True, True]], [[True, False], [True, False]]])
 
 
 def test_border_edge_likelihood_is_probability_beyond_border_times_peak_density():
     """A left edge on the border: the right edge is scored as usual, the left one by
-    Phi((border - predicted edge) / sd) / (sqrt(2 pi) sigma)."""
-    model = BoxMeasurement((1920, 1080), edge_std=12.0, border_margin=1.0)
+    Phi((border - predicted edge) / sd) / (sqrt(2 pi) sigma), sigma = 0.075 of the 160 px
+    height = 12 px."""
+    model = BoxMeasurement((1920, 1080), edge_noise=0.075, border_margin=1.0)
     means = np.array([[[20.0, 0.0, 30.0], [500.0, 0.0, 80.0]]])
     covs = np.tile(np.diag([100.0, 50.0, 25.0]), (1, 2, 1, 1))
     z = edges_from_ltwh(np.array([[0.0, 430.0, 52.0, 165.0]]))
     observed = model.observed(z)
     got = model.loglik(means, covs, z, observed)[0, 0]
-    zhat, S, _ = gaussian.innovation(means, covs, H, model.R)
+    zhat, S, _ = gaussian.innovation(means, covs, H, np.eye(2) * 144.0)
     sd_left = np.sqrt(S[0, 0, 0, 0])
     expected = (multivariate_normal(zhat[0, 1], S[0, 1]).logpdf(z[0, 1])
                 + multivariate_normal(zhat[0, 0, 1], S[0, 0, 1, 1]).logpdf(z[0, 0, 1])

@@ -42,30 +42,47 @@ def gap_frames(scene, person=1, other=2):
     return gap
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-@pytest.mark.parametrize("occlusion", ["object-wise", "measurement-wise"])
-def test_hidden_pedestrian_keeps_its_label_with_occlusion(occlusion, seed):
-    scene = crossing_pair(seed)
+def existence_over_gap(scene, occlusion):
+    """The track id of person 1 before the gap, its existence at each gap frame (0 once its
+    Bernoulli is gone) and the id matched to the person after the gap."""
     gap = gap_frames(scene)
-    assert len(gap) >= 8  # about a second behind the nearer person, tracked at 15 Hz
-    result = Tracker(TrackerConfig(occlusion=occlusion)).run(scene.detections, scene.frames)
-    before = track_of(scene, result, 1, range(gap[0] - 40, gap[0] - 10, 2))
-    after = track_of(scene, result, 1, range(gap[-1] + 20, gap[-1] + 50, 2))
-    label = before[0]
-    assert label > 0 and set(before) == {label} and set(after) == {label}
-    during = [result.id[result.frame == f] for f in gap]
-    assert all(label in ids for ids in during)
+    tracker = Tracker(TrackerConfig(occlusion=occlusion))
+    label, existence, after = None, [], None
+    slices = scene.detections.frame_slices(scene.frames)
+    for frame, rows in enumerate(slices, start=1):
+        tracks = tracker.step(scene.detections.box[rows], scene.detections.score[rows])
+        f = tracker.filter
+        if frame == gap[0] - 10:
+            label = track_of_tracks(scene, tracks, frame)
+        if gap[0] <= frame <= gap[-1]:
+            slot = np.flatnonzero(f.slot_used & (tracker._report_id == label)
+                                  & (tracker._reported_serial == f.slot_serial))
+            existence.append(float(f.existence()[slot[0]]) if len(slot) else 0.0)
+        if frame == gap[-1] + 30:
+            after = track_of_tracks(scene, tracks, frame)
+    return label, np.array(existence), after
+
+
+def track_of_tracks(scene, tracks, frame, person=1):
+    truth = scene.truth.box[(scene.truth.frame == frame) & (scene.truth.id == person)]
+    overlap = iou(truth, tracks.boxes)
+    return int(tracks.ids[overlap.argmax()]) if overlap.size and overlap.max() >= 0.5 else 0
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_hidden_pedestrian_is_lost_or_relabelled_without_occlusion(seed):
+def test_hidden_pedestrian_keeps_its_label_with_occlusion(seed):
+    """A person walks behind another for about a second (no detection). Either occlusion
+    model keeps the person's Bernoulli alive through the gap and the same id after it;
+    without occlusion its existence falls with every miss (the id may be recovered only
+    because a weak Bernoulli is kept)."""
     scene = crossing_pair(seed)
-    gap = gap_frames(scene)
-    result = Tracker(TrackerConfig(occlusion="none")).run(scene.detections, scene.frames)
-    label = track_of(scene, result, 1, [gap[0] - 20])[0]
-    after = track_of(scene, result, 1, [gap[-1] + 30])[0]
-    lost = any(label not in result.id[result.frame == f] for f in gap)
-    assert label > 0 and (lost or after != label)
+    assert len(gap_frames(scene)) >= 8
+    plain = existence_over_gap(scene, "none")[1]
+    assert plain.min() < 0.1
+    for occlusion in ("object-wise", "measurement-wise"):
+        label, existence, after = existence_over_gap(scene, occlusion)
+        assert label > 0 and after == label
+        assert existence.mean() > plain.mean() + 0.1
 
 
 def test_existence_in_unit_interval_and_labels_unique():
@@ -85,7 +102,9 @@ def test_existence_in_unit_interval_and_labels_unique():
         assert len(np.unique(tracks.ids)) == len(tracks.ids)
         assert ((tracks.existence > 0.5) & (tracks.existence <= 1)).all()
         shown = np.flatnonzero(f.slot_used & (r > 0.5))
-        assert sorted(tracker._report_id[shown]) == tracks.ids.tolist()
+        assert set(tracks.ids) <= set(tracker._report_id[shown])
+        detected = np.flatnonzero(f.slot_used & (r > 0.5) & (f.slot_detection >= 0))
+        assert set(tracker._report_id[detected]) <= set(tracks.ids)
         for slot in shown:
             track_id, serial = int(tracker._report_id[slot]), int(f.slot_serial[slot])
             assert serial_of_id.setdefault(track_id, serial) == serial
@@ -161,7 +180,9 @@ def test_a_detection_where_it_could_have_been_hidden_weighs_occludability():
     hidden_z = np.array([h, 0.0])
     lik = np.exp(f.measurement.loglik(f.mean[:n], f.cov[:n], z, f.measurement.observed(z)))
     hit = mass[:, None] * det[:, None] * (1 - occ[:, None] * hidden_z) * lik
-    clutter = config.clutter_density * (1 - config.occludability * hidden_z)
+    W, H = config.image_size
+    clutter = config.clutter_rate / (W * H * seen[:, 2] * seen[:, 3]) * (
+        1 - config.occludability * hidden_z)
     new = clutter + hit[poisson].sum(axis=0)
     r, miss_sum = mass[mine].sum(), (mass * miss)[mine].sum()
     odds = hit[mine].sum(axis=0) / new  # the object against clutter or a new object
@@ -202,7 +223,8 @@ def test_a_new_occlusion_model_plugs_in_without_filter_changes():
               for k in range(40)]
     results = {}
     for name, model in (("none", None), ("wall", Wall())):
-        config = TrackerConfig(occlusion="none", frame_step=1, fps=15)
+        config = TrackerConfig(occlusion="none", frame_step=1, fps=15, report_coast_time=10.0,
+                               report_centre_std=10.0)
         results[name] = Tracker(config, occlusion=model).run(frames)
     assert set(results["wall"].frame) == set(range(1, 41))
     assert results["wall"].id.tolist() == [1] * 40
@@ -234,20 +256,20 @@ def test_step_rejects_bad_boxes():
 def test_config_defaults_follow_the_paper():
     assert TrackerConfig(occlusion="none").stationary_detectability == 0.9
     c = TrackerConfig()
-    assert (c.stationary_detectability, c.capacity, c.max_labels, c.edge_std) == \
-        (0.93, 2048, 72, 12.0)
+    assert (c.stationary_detectability, c.capacity, c.max_labels) == (0.93, 2048, 72)
+    assert c.edge_noise * 175 == pytest.approx(12.0, abs=0.1)  # 12 px at MOT17-04's median
     assert (c.occludability, c.occludability_ratio, c.report_existence) == (0.8, 0.8, 0.5)
-    assert c.dt == pytest.approx(1 / 15)
+    assert c.dt == pytest.approx(1 / 30)  # every frame
     assert c.velocity_time == float("inf")  # constant velocity
 
 
 def test_config_from_toml(tmp_path):
     path = tmp_path / "tracker.toml"
     path.write_text('occlusion = "object-wise"\nimage_size = [1280, 720]\ncapacity = 512\n'
-                    'edge_std = 8\nvelocity_time = 1\n')
-    c = TrackerConfig.from_toml(path, frame_step=1)
-    assert (c.occlusion, c.image_size, c.capacity, c.edge_std, c.frame_step) == \
-        ("object-wise", (1280.0, 720.0), 512, 8.0, 1)
+                    'edge_noise = 0.05\nvelocity_time = 1\n')
+    c = TrackerConfig.from_toml(path, frame_step=2)
+    assert (c.occlusion, c.image_size, c.capacity, c.edge_noise, c.frame_step) == \
+        ("object-wise", (1280.0, 720.0), 512, 0.05, 2)
     assert c.velocity_time == 1.0 and Tracker(c).filter.motion.F[1, 1] < 1
 
 
@@ -257,9 +279,11 @@ def test_config_from_toml(tmp_path):
     ("image_size = [1, 2, 3]\n", "image_size must be a pair"),
     ('occlusion = "grid"\n', "occlusion must be one of"),
     ("report_existence = 1.5\n", "report_existence must be a probability"),
-    ("edge_std = 0\n", "edge_std must be a positive number"),
+    ("edge_noise = 0\n", "edge_noise must be a positive number"),
+    ('camera_motion = "orb"\n', "camera_motion must be one of"),
+    ("confirm_hits = 6\n", "confirm_hits must be between 1 and confirm_window"),
     ("velocity_time = 0\n", "velocity_time must be a positive number of seconds"),
-    ("edge_std = \n", "not valid TOML"),
+    ("edge_noise = \n", "not valid TOML"),
 ])
 def test_config_errors_name_the_file(tmp_path, text, message):
     path = tmp_path / "bad.toml"

@@ -50,11 +50,11 @@ import numpy as np
 
 from occtrack.association import lbp_marginals
 from occtrack.models.birth import EdgeBirths
-from occtrack.models.box import BoxMeasurement
+from occtrack.models.box import BoxMeasurement, heights
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import OcclusionContext, OcclusionModel
-from occtrack.tracker.config import TrackerConfig
+from occtrack.config import TrackerConfig
 
 N_BIRTH = 5
 LOG_FLOOR = -300.0
@@ -70,7 +70,9 @@ class GaussianMixturePMB:
         self.dt = c.dt
         self.motion = ConstantVelocity(c.dt, c.position_noise, c.velocity_noise, c.size_noise,
                                        c.velocity_time)
-        self.measurement = BoxMeasurement(c.image_size, c.edge_std, c.border_margin)
+        self.coast_motion = ConstantVelocity(c.dt, c.position_noise, c.velocity_noise,
+                                             c.size_noise, c.coast_velocity_time)
+        self.measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
@@ -84,7 +86,14 @@ class GaussianMixturePMB:
         self.det = np.zeros(cap)
         self.occ = np.zeros(cap)
         self.label = np.full(cap, -1, dtype=np.int64)
+        self.coast = np.zeros(cap)  # seconds since the component's object was last detected
         self.slot_used = np.zeros(L, dtype=bool)
+        # per label slot: tracked frames since birth, frames detected, seconds since the last
+        # detection, and the detection taken at the last step (-1: missed)
+        self.slot_age = np.zeros(L, dtype=np.int64)
+        self.slot_hits = np.zeros(L, dtype=np.int64)
+        self.slot_coast = np.zeros(L)
+        self.slot_detection = np.full(L, -1, dtype=np.int64)
         self.slot_serial = np.full(L, -1, dtype=np.int64)  # unique per Bernoulli ever labelled
         self._next_serial = 0
         self.steps = 0
@@ -103,21 +112,40 @@ class GaussianMixturePMB:
 
     def object_means(self) -> tuple[np.ndarray, np.ndarray]:
         """(r, mean state) of every slot: mass-weighted mean of its components' means."""
+        r, means, _ = self.object_moments()
+        return r, means
+
+    def object_moments(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(r, mean state, centre standard deviation (L, 2) in px) of every slot: the moments
+        of its mixture, spread of the means included."""
         n = self.n
         lab = self.label[:n] >= 0
         idx, w = self.label[:n][lab], self.mass[:n][lab]
         L = len(self.slot_used)
         r = np.bincount(idx, weights=w, minlength=L)
+        share = w / np.maximum(r[idx], 1e-300)
         flat = self.mean[:n][lab].reshape(-1, 6)
-        sums = np.stack([np.bincount(idx, weights=w * flat[:, c], minlength=L)
-                         for c in range(6)], axis=1)
-        means = (sums / np.maximum(r, 1e-300)[:, None]).reshape(L, 2, 3)
-        return r, means
+        means = np.stack([np.bincount(idx, weights=share * flat[:, c], minlength=L)
+                          for c in range(6)], axis=1).reshape(L, 2, 3)
+        centre = self.mean[:n][lab][:, :, 0]
+        spread = self.cov[:n][lab][:, :, 0, 0] + (centre - means[idx, :, 0]) ** 2
+        var = np.stack([np.bincount(idx, weights=share * spread[:, a], minlength=L)
+                        for a in range(2)], axis=1)
+        return r, means, np.sqrt(var)
 
-    def step(self, z: np.ndarray, scores: np.ndarray) -> None:
-        """Predict to this frame, add births, update with its detections z (M, 2, 2)."""
+    def confirmed(self) -> np.ndarray:
+        """Which slots have been detected in `confirm_hits` tracked frames."""
+        return self.slot_used & (self.slot_hits >= self.config.confirm_hits)
+
+    def step(self, z: np.ndarray, scores: np.ndarray,
+             camera: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        """Move with the camera, predict to this frame, add births, update with its
+        detections z (M, 2, 2). `camera` is (scale (2,), shift (2,)): the image point x of
+        the last frame is at scale * x + shift in this one."""
         observed = self.measurement.observed(z)
         self._learn_sizes(z, observed)
+        if camera is not None:
+            self.move_image(*camera)
         self._predict()
         self._add_births()
         self._update(z, observed, scores)
@@ -125,11 +153,25 @@ class GaussianMixturePMB:
 
     # -- prediction -----------------------------------------------------------------------
 
+    def move_image(self, scale: np.ndarray, shift: np.ndarray) -> None:
+        """Carry every component along an image motion x -> scale * x + shift per axis:
+        centres move, velocities and half-sizes scale, covariances scale by scale^2."""
+        n = self.n
+        scale, shift = np.asarray(scale, dtype=float), np.asarray(shift, dtype=float)
+        self.mean[:n] *= scale[:, None]
+        self.mean[:n, :, 0] += shift
+        self.cov[:n] *= (scale**2)[:, None, None]
+
     def _predict(self) -> None:
         n = self.n
         if n == 0:
             return
-        self.mean[:n], self.cov[:n] = self.motion.predict(self.mean[:n], self.cov[:n])
+        unit = heights(self.mean[:n])
+        coasting = self.coast[:n] > 0.5 * self.dt  # (merged components average it)
+        for model, group in ((self.motion, ~coasting), (self.coast_motion, coasting)):
+            if group.any():
+                self.mean[:n][group], self.cov[:n][group] = model.predict(
+                    self.mean[:n][group], self.cov[:n][group], unit[group])
         self.det[:n] = self.detectability.predict(self.det[:n], self.dt)
         self.occ[:n] = self.occludability.predict(self.occ[:n], self.dt)
         centre, half = self.mean[:n, :, 0], self.mean[:n, :, 2]
@@ -164,8 +206,9 @@ class GaussianMixturePMB:
     def _add_births(self) -> None:
         c = self.config
         spread = c.spread_birth_rate * self.dt + (c.initial_objects if self.steps == 0 else 0.0)
+        size_mean, size_std = self._size_prior()
         mass, means, covs = self.births.components(c.edge_birth_rate * self.dt, spread,
-                                                   *self._size_prior())
+                                                   size_mean, size_std, 2.0 * size_mean[1])
         keep = mass > 0
         b = int(keep.sum())
         s = slice(self.n, self.n + b)
@@ -173,6 +216,7 @@ class GaussianMixturePMB:
         self.det[s] = c.birth_detectability
         self.occ[s] = c.birth_occludability
         self.label[s] = -1
+        self.coast[s] = 0.0
         self.n += b
 
     # -- update ---------------------------------------------------------------------------
@@ -182,8 +226,13 @@ class GaussianMixturePMB:
         self._sort_by_label()
         n, M = self.n, len(z)
         mass, mean, cov = self.mass[:n], self.mean[:n], self.cov[:n]
-        det, occ, label = self.det[:n], self.occ[:n], self.label[:n]
+        det, label, coast = self.det[:n], self.label[:n], self.coast[:n]
         L = len(self.slot_used)
+        # occlusion explains the misses of confirmed objects only: a newborn's broad density
+        # overlaps the detections around it, and a miss it could blame on them would keep a
+        # false track alive; the others are treated as not occludable (o = 0)
+        established = np.where(label >= 0, self.confirmed()[np.maximum(label, 0)], False)
+        occ = np.where(established, self.occ[:n], 0.0)
 
         r_slot = np.bincount(label[label >= 0], weights=mass[label >= 0], minlength=L)
         within = np.where(label >= 0, mass / np.maximum(r_slot[label], 1e-300), mass)
@@ -227,13 +276,16 @@ class GaussianMixturePMB:
             r_obj[rows[starts]] = np.add.reduceat(mass, starts)
             miss_mass[rows[starts]] = np.add.reduceat(mass * miss, starts)
         r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
-        clutter = c.clutter_density * np.clip(scores, c.score_floor, 1.0) ** (
+        W, H = self.image_size
+        size = np.maximum((z[:, :, 1] - z[:, :, 0]).prod(axis=1), 1.0)
+        clutter = c.clutter_rate / (W * H * size) * np.clip(scores, c.score_floor, 1.0) ** (
             -c.clutter_score_power) * (1.0 - c.occludability * seen_hidden)
         w_new = clutter + L_hit[A]
 
         marg = lbp_marginals(L_hit[:A], miss_obj, w_new, tol=c.lbp_tolerance,
                              max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
+        self._count_detections(slots, marg.p_hit)
 
         hit_factor = np.zeros((A + 1, M))
         np.divide(marg.p_hit, L_hit[:A], out=hit_factor[:A], where=L_hit[:A] > 0)
@@ -263,7 +315,9 @@ class GaussianMixturePMB:
         escaped = vv * (1.0 - seen_hidden[np.maximum(j, 0)]) if M else vv
         seen_o = o * escaped / np.maximum(1.0 - o + o * escaped, 1e-300)
         missed_o = o * (1.0 - d + d * hidden_if_occludable) / np.maximum(mm, 1e-300)
-        new_occ = np.where(is_hit, seen_o, missed_o)
+        new_occ = np.where(established[parent], np.where(is_hit, seen_o, missed_o),
+                           self.occ[:n][parent])
+        new_coast = np.where(is_hit, 0.0, coast[parent] + self.dt)
         h = np.flatnonzero(is_hit)
         if len(h):
             new_mean[h], new_cov[h] = self.measurement.update(
@@ -271,15 +325,45 @@ class GaussianMixturePMB:
 
         newborn = np.where(is_hit & (new_label < 0), j, -1)
         new_label = self._assign_labels(new_mass, new_label, newborn, M)
-        new_mass, new_mean, new_cov, new_det, new_occ, new_label = self._merge(
-            new_mass, new_mean, new_cov, new_det, new_occ, new_label)
+        new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label = self._merge(
+            new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label)
+        alive = self._confirm_or_delete(new_label)
 
-        k = len(new_mass)
+        k = int(alive.sum())
         self.n = k
-        self.mass[:k], self.mean[:k], self.cov[:k] = new_mass, new_mean, new_cov
-        self.det[:k], self.occ[:k] = np.clip(new_det, 0, 1), np.clip(new_occ, 0, 1)
-        self.label[:k] = new_label
+        self.mass[:k], self.mean[:k], self.cov[:k] = (new_mass[alive], new_mean[alive],
+                                                       new_cov[alive])
+        self.det[:k], self.occ[:k] = np.clip(new_det[alive], 0, 1), np.clip(new_occ[alive], 0, 1)
+        self.coast[:k], self.label[:k] = new_coast[alive], new_label[alive]
         self._cap_existence()
+
+    def _count_detections(self, slots: np.ndarray, p_hit: np.ndarray) -> None:
+        """Per-slot bookkeeping of this step's association: an object took detection j when
+        p_hit_ij > 1/2 (at most one j can)."""
+        self.slot_detection[:] = -1
+        if len(slots) and p_hit.shape[1]:
+            best = p_hit.argmax(axis=1)
+            took = p_hit[np.arange(len(slots)), best] > 0.5
+            self.slot_detection[slots[took]] = best[took]
+        used = self.slot_used
+        hit = self.slot_detection >= 0
+        self.slot_age[used] += 1
+        self.slot_hits[hit] += 1
+        self.slot_coast[used & ~hit] += self.dt
+        self.slot_coast[hit] = 0.0
+
+    def _confirm_or_delete(self, label: np.ndarray) -> np.ndarray:
+        """Delete the Bernoullis that can no longer be detected in `confirm_hits` of their
+        first `confirm_window` tracked frames (n-of-m confirmation): a false detection that
+        repeats for a frame or two starts one, and it must not live on. Returns the mask of
+        components kept."""
+        c = self.config
+        left = np.maximum(c.confirm_window - self.slot_age, 0)
+        doomed = self.slot_used & (self.slot_hits + left < c.confirm_hits)
+        if not doomed.any():
+            return np.ones(len(label), dtype=bool)
+        self.slot_used[doomed] = False
+        return ~((label >= 0) & doomed[np.maximum(label, 0)])
 
     def _sort_by_label(self) -> None:
         """Order the pool by label, Poisson part first (births arrive at the end)."""
@@ -287,7 +371,7 @@ class GaussianMixturePMB:
         order = np.argsort(self.label[:n], kind="stable")
         if (order == np.arange(n)).all():
             return
-        for arr in (self.mass, self.mean, self.cov, self.det, self.occ, self.label):
+        for arr in (self.mass, self.mean, self.cov, self.det, self.occ, self.coast, self.label):
             arr[:n] = arr[:n][order]
 
     def _select(self, flat: np.ndarray) -> np.ndarray:
@@ -355,24 +439,32 @@ class GaussianMixturePMB:
             label = np.where(born, slot_of_meas[np.maximum(newborn, 0)], label)
             self.slot_serial[free] = self._next_serial + np.arange(len(free))
             self._next_serial += len(free)
+            self.slot_age[free] = 1
+            self.slot_hits[free] = 1
+            self.slot_coast[free] = 0.0
+            self.slot_detection[free] = new[keep_new]
         return label
 
-    def _merge(self, mass, mean, cov, det, occ, label):
+    def _merge(self, mass, mean, cov, det, occ, coast, label):
         """Merge components of one label that fall in the same cell of (centre, velocity,
         half-size) space by moment matching: masses add, the mean and covariance are those of
-        the pooled mixture (spread of the means included), d and o are mass-weighted averages.
-        """
+        the pooled mixture (spread of the means included), d, o and the coasting time are
+        mass-weighted averages. Cells are `merge_position` / `merge_velocity` box heights
+        wide, the height rounded to a power of two so that similar boxes share a grid."""
         if len(mass) < 2:
-            return mass, mean, cov, det, occ, label
+            return mass, mean, cov, det, occ, coast, label
         c = self.config
+        octave = np.round(np.log2(heights(mean))).astype(np.int64)
         cell = np.array([c.merge_position, c.merge_velocity, c.merge_position] * 2)
-        cells = np.floor(mean.reshape(-1, 6) / cell).astype(np.int64)
-        order = np.lexsort([cells[:, i] for i in range(5, -1, -1)] + [label])
+        cells = np.floor(mean.reshape(-1, 6) / (cell * np.exp2(octave)[:, None])).astype(
+            np.int64)
+        cells = np.concatenate([octave[:, None], cells], axis=1)
+        order = np.lexsort([cells[:, i] for i in range(6, -1, -1)] + [label])
         key = np.concatenate([label[order, None], cells[order]], axis=1)
         start = np.ones(len(order), dtype=bool)
         start[1:] = (key[1:] != key[:-1]).any(axis=1)
         if start.all():
-            return mass, mean, cov, det, occ, label
+            return mass, mean, cov, det, occ, coast, label
         first = np.flatnonzero(start)
         group = np.cumsum(start) - 1
         m = mass[order]
@@ -384,7 +476,8 @@ class GaussianMixturePMB:
         sigma = np.add.reduceat(share[:, None, None, None] * spread, first)
         d = np.add.reduceat(share * det[order], first)
         o = np.add.reduceat(share * occ[order], first)
-        return total, mu, sigma, d, o, label[order][first]
+        t = np.add.reduceat(share * coast[order], first)
+        return total, mu, sigma, d, o, t, label[order][first]
 
     def _cap_existence(self) -> None:
         """Guard against r exceeding 1 by rounding: scale such an object's masses down."""

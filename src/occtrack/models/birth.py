@@ -23,22 +23,24 @@ class EdgeBirths:
     speed_std: float
 
     def components(self, edge_mass: float, spread_mass: float, size_mean: np.ndarray,
-                   size_std: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   size_std: np.ndarray,
+                   speed_unit: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Masses (5,), means (5, 2, 3) and covariances (5, 2, 3, 3) of the birth components:
-        left, right, top, bottom edge (each `edge_mass`), then the spread one."""
+        left, right, top, bottom edge (each `edge_mass`), then the spread one. Speeds are in
+        units of `speed_unit` px (the box tracker's: the prior's box height)."""
         W, H = self.image_size
         extent = np.array([W, H])
         means = np.zeros((5, 2, 3))
         sds = np.zeros((5, 2, 3))
         means[:, :, 0] = extent / 2.0
         sds[:, :, 0] = extent / 2.0
-        sds[:, :, 1] = self.speed_std
+        sds[:, :, 1] = self.speed_std * speed_unit
         means[:, :, 2] = size_mean
         sds[:, :, 2] = size_std
         for edge, (axis, side) in enumerate([(0, 0), (0, 1), (1, 0), (1, 1)]):
             means[edge, axis, 0] = side * extent[axis]
             sds[edge, axis, 0] = size_mean[axis]
-            means[edge, axis, 1] = self.inward_speed * (1 - 2 * side)
+            means[edge, axis, 1] = self.inward_speed * speed_unit * (1 - 2 * side)
         covs = np.zeros((5, 2, 3, 3))
         idx = np.arange(3)
         covs[:, :, idx, idx] = sds**2

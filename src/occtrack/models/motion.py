@@ -10,7 +10,9 @@ of dt seconds, with a = exp(-dt / tau),
     Q = diag(q_c^2 dt, q_v^2 tau (1 - a^2) / 2, q_s^2 dt)
 
 with q the noise of each feature per square-root second, so that the same settings describe
-tracking at any frame rate (the paper tracked MOT17-04 at 15 Hz). tau = inf (the default) is
+tracking at any frame rate (the paper tracked MOT17-04 at 15 Hz). The noises may be given in
+units of a per-component length (the box tracker's box height h_k), Q_k = h_k^2 Q: a person
+near the camera moves and changes size by more pixels than one far away. tau = inf (the default) is
 the constant-velocity model, F = [[1, dt, 0], [0, 1, 0], [0, 0, 1]], Q = diag(q^2) dt.
 """
 
@@ -50,5 +52,8 @@ class ConstantVelocity:
         return np.diag([self.position_noise**2 * self.dt, self.velocity_noise**2 * spread,
                         self.size_noise**2 * self.dt])
 
-    def predict(self, means: np.ndarray, covs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return gaussian.predict(means, covs, self.F, self.Q)
+    def predict(self, means: np.ndarray, covs: np.ndarray,
+                scale: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Predict every component; `scale` (K,), if given, is each one's unit of length."""
+        Q = self.Q if scale is None else scale[:, None, None, None] ** 2 * self.Q
+        return gaussian.predict(means, covs, self.F, Q)

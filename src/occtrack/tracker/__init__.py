@@ -1,6 +1,6 @@
 """The Gaussian-mixture Poisson multi-Bernoulli box tracker with pluggable occlusion."""
 
-from occtrack.tracker.config import OCCLUSION_NAMES, TrackerConfig
+from occtrack.config import OCCLUSION_NAMES, TrackerConfig
 from occtrack.tracker.tracker import Tracker, TrackResult, Tracks
 
 __all__ = ["OCCLUSION_NAMES", "TrackResult", "Tracker", "TrackerConfig", "Tracks"]

@@ -25,26 +25,33 @@ from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.occlusion.boxes import box_occlusion
 from occtrack.progress import progress
-from occtrack.tracker.config import TrackerConfig
+from occtrack.tracker.camera import estimate_shift
+from occtrack.config import TrackerConfig
 
 
 @dataclass(frozen=True)
 class Tracks:
     """The objects reported at one frame: ids (n,), boxes (n, 4) left, top, width, height,
-    existence (n,) and velocities (n, 2) of the box centres in px / s."""
+    existence (n,), velocities (n, 2) of the box centres in px / s, and detection_index (n,):
+    the detection each object took this frame (its box is then that detection's, as a
+    detector-driven tracker reports it), -1 for an object reported without one (coasting:
+    the filter's estimate)."""
 
     ids: np.ndarray
     boxes: np.ndarray
     existence: np.ndarray
     velocities: np.ndarray
+    detection_index: np.ndarray
 
     def __len__(self) -> int:
         return len(self.ids)
 
     def moved(self, seconds: float) -> Tracks:
-        """The same tracks with boxes carried `seconds` further along their velocities."""
+        """The same tracks with boxes carried `seconds` further along their velocities (for
+        frames that are not tracked: no detection taken)."""
         shift = np.concatenate([self.velocities * seconds, np.zeros((len(self), 2))], axis=1)
-        return Tracks(self.ids, self.boxes + shift, self.existence, self.velocities)
+        return Tracks(self.ids, self.boxes + shift, self.existence, self.velocities,
+                      np.full(len(self), -1, dtype=np.int64))
 
 
 @dataclass(frozen=True)
@@ -80,10 +87,16 @@ class Tracker:
         self._reported_serial = np.full(L, -1, dtype=np.int64)
         self._report_id = np.zeros(L, dtype=np.int64)
         self._next_id = 1
+        self._boxes = np.zeros((0, 4))
+        self._previous = None
 
-    def step(self, boxes: np.ndarray, scores: np.ndarray | None = None) -> Tracks:
+    def step(self, boxes: np.ndarray, scores: np.ndarray | None = None,
+             camera_motion: np.ndarray | None = None) -> Tracks:
         """Track one frame's detections: boxes (M, 4) left, top, width, height in px, scores
-        (M,) detector confidences (1 when None)."""
+        (M,) detector confidences (1 when None). `camera_motion`, a 2 x 3 affine matrix,
+        maps the previous tracked frame's image points to this one's (its rotation and shear
+        are ignored: the state holds boxes); without it the camera's shift is estimated from
+        the detections (`camera_motion = "detections"`) or taken as none."""
         boxes = np.asarray(boxes, dtype=float)
         if boxes.size == 0:
             boxes = boxes.reshape(0, 4)
@@ -98,14 +111,33 @@ class Tracker:
             raise ValueError("scores must be M finite numbers, one per box")
         boxes = boxes.copy()
         boxes[:, 2:] = np.maximum(boxes[:, 2:], 1.0)
-        self.filter.step(edges_from_ltwh(boxes), scores)
+        camera = None
+        if camera_motion is not None:
+            affine = np.asarray(camera_motion, dtype=float)
+            if affine.shape != (2, 3) or not np.isfinite(affine).all():
+                raise ValueError("camera_motion must be a finite 2 x 3 affine matrix")
+            camera = (np.diag(affine[:, :2]).copy(), affine[:, 2].copy())
+        elif self.config.camera_motion == "detections" and self._previous is not None:
+            shift = estimate_shift(self._previous, boxes)
+            if shift is not None:
+                camera = (np.ones(2), shift)
+        self.filter.step(edges_from_ltwh(boxes), scores, camera)
+        self._boxes = boxes
+        self._previous = boxes
         return self.tracks()
 
     def tracks(self) -> Tracks:
-        """The objects whose existence exceeds `report_existence`, by id."""
-        f = self.filter
-        r, means = f.object_means()
-        shown = np.flatnonzero(f.slot_used & (r > self.config.report_existence))
+        """The objects reported now, by id: existence above `report_existence`, and either
+        detected at this step or unseen for at most `report_coast_time` with the centre known
+        to within `report_centre_std` box heights (a coasting estimate drifts, and a box
+        shown where nobody is costs more than one left out)."""
+        f, c = self.filter, self.config
+        r, means, centre_std = f.object_moments()
+        took = f.slot_detection
+        height = np.maximum(2.0 * means[:, 1, 2], 1.0)
+        trusted = (took >= 0) | ((f.slot_coast <= c.report_coast_time + 1e-9)
+                                 & (centre_std.max(axis=1) < c.report_centre_std * height))
+        shown = np.flatnonzero(f.slot_used & (r > c.report_existence) & trusted)
         fresh = shown[self._reported_serial[shown] != f.slot_serial[shown]]
         self._report_id[fresh] = self._next_id + np.arange(len(fresh))
         self._reported_serial[fresh] = f.slot_serial[fresh]
@@ -113,8 +145,11 @@ class Tracker:
         ids = self._report_id[shown]
         order = np.argsort(ids)
         shown = shown[order]
-        return Tracks(ids[order], ltwh_from_states(means[shown]), r[shown],
-                      means[shown, :, 1].copy())
+        boxes = ltwh_from_states(means[shown])
+        index = took[shown]
+        detected = index >= 0
+        boxes[detected] = self._boxes[index[detected]]
+        return Tracks(ids[order], boxes, r[shown], means[shown, :, 1].copy(), index)
 
     def run(self, detections: MotTable | Iterable[np.ndarray], num_frames: int | None = None,
             quiet: bool = True, desc: str = "tracking") -> TrackResult:

@@ -1,0 +1,254 @@
+"""Settings of the box tracker, one dataclass, loadable from a TOML file (floor 1: the schema).
+
+Every setting is in units that transfer between cameras, resolutions and frame rates:
+lengths in box heights (a person's image size sets the scale of their noise and speed, which
+is what perspective does), rates per second, and the clutter and birth terms relative to the
+image. The paper's pixel settings for MOT17-04 (12 px edge noise, 11.6 px / sqrt(s) process
+noise, ...) are converted at that sequence's median detection height, 175 px, so the paper's
+tuning is kept where it was made and scales everywhere else. The image size and frame rate
+come from the sequence (`seqinfo.ini`, flags), never from a default meant for one camera.
+
+A TOML file holds any subset of the fields at top level, e.g.
+
+    occlusion = "object-wise"
+    image_size = [1280, 720]
+    edge_noise = 0.05
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from occtrack.errors import OcctrackError
+
+OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
+CAMERA_MOTION_NAMES = ("detections", "none")
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    """Every setting of the Gaussian-mixture PMB box tracker.
+
+    Rates are per second and noises per square-root second, so the settings hold at any
+    frame rate; dt = frame_step / fps seconds pass between tracked frames.
+    """
+
+    occlusion: str = "measurement-wise"  # none, object-wise or measurement-wise
+    image_size: tuple[float, float] = (1920.0, 1080.0)  # width, height in px
+    fps: float = 30.0  # frames per second of the sequence
+    frame_step: int = 1  # track every frame_step-th frame, report every frame
+    camera_motion: str = "detections"  # estimate the camera's shift from the detections, or
+    # "none" (a still camera); a per-frame motion given to Tracker.step always wins
+
+    capacity: int = 2048  # Gaussian components kept, all objects and the Poisson part
+    max_labels: int = 72  # labelled Bernoullis kept; the weakest are recycled
+    report_existence: float = 0.5  # report an object when r exceeds this
+
+    # lengths below are in units of the box's own height h (h of the component's mean box)
+    edge_noise: float = 0.069  # std of each measured box edge, h (12 px at h = 175 px)
+    border_margin: float = 1.0  # an edge this close to the border is unmeasured, px
+
+    position_noise: float = 0.066  # process noise of box centres, h / sqrt(s)
+    velocity_noise: float = 0.5  # of velocities, h / s / sqrt(s)
+    size_noise: float = 0.044  # of half-sizes, h / sqrt(s)
+    velocity_time: float = math.inf  # s: velocities relax to 0 with this time constant
+    # (models.motion); inf: constant velocity, the paper's model
+    coast_velocity_time: float = 0.1  # s: the same, for an object missed at its last update
+
+    death_rate: float = 0.075  # per second, objects inside the image
+    exit_survival: float = 0.4  # per tracked frame, objects whose centre left the image
+
+    detectability: float | None = None  # stationary P_D; None: 0.9 without occlusion, else 0.93
+    detectability_ratio: float = 0.99  # fraction of a departure forgotten in half a second
+    occludability: float = 0.8  # stationary probability that a measurement can be hidden
+    occludability_ratio: float = 0.8
+    birth_detectability: float = 0.9
+    birth_occludability: float = 0.5
+
+    # kappa p_F(z) = clutter_rate / (W H w h) / score^power: a false box falls anywhere in the
+    # image with a scale-free size, so its density per px^4 is 1 / (W H w h) (dimensionless rate)
+    clutter_rate: float = 5.0
+    clutter_score_power: float = 2.0
+    score_floor: float = 0.05  # scores are clipped to [score_floor, 1] first
+
+    edge_birth_rate: float = 6.94  # expected new objects per second per image edge
+    spread_birth_rate: float = 1.0  # per second, anywhere in the image
+    initial_objects: float = 100.0  # Poisson mass spread over the image at the first frame
+    inward_speed: float = 0.26  # mean speed of objects entering at an edge, h / s
+    birth_speed_std: float = 0.51  # h / s
+    birth_half_size: tuple[float, float] | None = None  # px; None: learnt from the detections
+    birth_half_size_std: tuple[float, float] | None = None
+
+    # a labelled Bernoulli is confirmed after confirm_hits detections within its first
+    # confirm_window tracked frames, else deleted (its detections were clutter); occlusion
+    # explains the misses of confirmed objects only
+    confirm_hits: int = 3
+    confirm_window: int = 5
+    # an undetected object is reported while it has been unseen at most this long, s, and its
+    # centre is known to within report_centre_std box heights
+    report_coast_time: float = 0.67
+    report_centre_std: float = 0.1
+
+    occlusion_gain: float = 2.0  # box geometry: clip(gain * overlap / area, 0, 1)
+    occlusion_ramp: tuple[float, float] = (-0.1, 0.25)  # bottom-gap ramp, 0 at first, 1 at second
+    occluder_min_existence: float = 0.1  # object-wise: objects with r above this occlude
+
+    max_components_per_object: int = 16  # each object keeps its heaviest ones; 0: no limit
+    prune_mass: float = 1e-5  # drop components lighter than this
+    label_min_existence: float = 1e-3  # Bernoullis weaker than this go to the Poisson part
+    merge_position: float = 0.017  # merge components of one object in one cell this wide, h
+    merge_velocity: float = 0.057  # h / s
+    lbp_tolerance: float = 1e-7  # stop loopy BP when messages change less than this
+    lbp_max_iterations: int = 200
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    @property
+    def dt(self) -> float:
+        return self.frame_step / self.fps
+
+    @property
+    def stationary_detectability(self) -> float:
+        if self.detectability is not None:
+            return self.detectability
+        return 0.9 if self.occlusion == "none" else 0.93
+
+    def replace(self, **changes) -> TrackerConfig:
+        return dataclasses.replace(self, **changes)
+
+    def validate(self) -> None:
+        """Raise ValueError naming the first setting out of range."""
+        if self.occlusion not in OCCLUSION_NAMES:
+            raise ValueError(f"occlusion must be one of {', '.join(OCCLUSION_NAMES)}, "
+                             f"not {self.occlusion!r}")
+        if self.camera_motion not in CAMERA_MOTION_NAMES:
+            raise ValueError(f"camera_motion must be one of {', '.join(CAMERA_MOTION_NAMES)}, "
+                             f"not {self.camera_motion!r}")
+        w, h = self.image_size
+        positive = {"image width": w, "image height": h, "fps": self.fps,
+                    "edge_noise": self.edge_noise, "report_centre_std": self.report_centre_std,
+                    "birth_speed_std": self.birth_speed_std, "prune_mass": self.prune_mass,
+                    "merge_position": self.merge_position, "merge_velocity": self.merge_velocity,
+                    "lbp_tolerance": self.lbp_tolerance, "occlusion_gain": self.occlusion_gain,
+                    "clutter_rate": self.clutter_rate, "score_floor": self.score_floor}
+        for name, value in positive.items():
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive number, not {value}")
+        non_negative = {"position_noise": self.position_noise,
+                        "velocity_noise": self.velocity_noise, "size_noise": self.size_noise,
+                        "death_rate": self.death_rate, "border_margin": self.border_margin,
+                        "edge_birth_rate": self.edge_birth_rate,
+                        "spread_birth_rate": self.spread_birth_rate,
+                        "initial_objects": self.initial_objects,
+                        "inward_speed": self.inward_speed,
+                        "clutter_score_power": self.clutter_score_power,
+                        "report_coast_time": self.report_coast_time}
+        for name, value in non_negative.items():
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a number >= 0, not {value}")
+        probabilities = {"report_existence": self.report_existence,
+                         "exit_survival": self.exit_survival,
+                         "detectability": self.stationary_detectability,
+                         "detectability_ratio": self.detectability_ratio,
+                         "occludability": self.occludability,
+                         "occludability_ratio": self.occludability_ratio,
+                         "birth_detectability": self.birth_detectability,
+                         "birth_occludability": self.birth_occludability,
+                         "occluder_min_existence": self.occluder_min_existence,
+                         "label_min_existence": self.label_min_existence}
+        for name, value in probabilities.items():
+            if not (0.0 <= value <= 1.0):
+                raise ValueError(f"{name} must be a probability in [0, 1], not {value}")
+        for name in ("velocity_time", "coast_velocity_time"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be a positive number of seconds (inf: "
+                                 f"constant velocity), not {getattr(self, name)}")
+        if self.frame_step < 1:
+            raise ValueError(f"frame_step must be at least 1, not {self.frame_step}")
+        if not 1 <= self.confirm_hits <= self.confirm_window:
+            raise ValueError(f"confirm_hits must be between 1 and confirm_window "
+                             f"({self.confirm_window}), not {self.confirm_hits}")
+        if self.max_labels < 1:
+            raise ValueError(f"max_labels must be at least 1, not {self.max_labels}")
+        if self.capacity < 16:
+            raise ValueError(f"capacity must be at least 16 components, not {self.capacity}")
+        if self.max_components_per_object < 0:
+            raise ValueError("max_components_per_object must be 0 (no limit) or more")
+        if self.lbp_max_iterations < 1:
+            raise ValueError("lbp_max_iterations must be at least 1")
+        if not self.occlusion_ramp[1] > self.occlusion_ramp[0]:
+            raise ValueError("occlusion_ramp must rise: (zero point, one point)")
+        for name in ("birth_half_size", "birth_half_size_std"):
+            value = getattr(self, name)
+            if value is not None and not (len(value) == 2 and all(v > 0 for v in value)):
+                raise ValueError(f"{name} must be two positive numbers (horizontal, vertical)")
+
+    @classmethod
+    def from_dict(cls, values: dict, source: str = "configuration") -> TrackerConfig:
+        """Build from plain values (as TOML gives them), checking names and types."""
+        fields = {f.name: f for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - set(fields))
+        if unknown:
+            raise OcctrackError(f"unknown setting {unknown[0]!r}; known settings: "
+                                f"{', '.join(fields)}", source)
+        clean = {}
+        for name, value in values.items():
+            default = fields[name].default
+            try:
+                clean[name] = _coerce(name, value, default)
+            except (TypeError, ValueError) as err:
+                raise OcctrackError(str(err), source) from None
+        try:
+            return cls(**clean)
+        except ValueError as err:
+            raise OcctrackError(str(err), source) from None
+
+    @classmethod
+    def from_toml(cls, path: str | Path, **overrides) -> TrackerConfig:
+        """Read a TOML file; `overrides` (not None) win over the file."""
+        values = load_toml(path)
+        values.update({k: v for k, v in overrides.items() if v is not None})
+        return cls.from_dict(values, str(path))
+
+
+def load_toml(path: str | Path) -> dict:
+    """The settings in a TOML file, unchecked; OcctrackError if it cannot be read."""
+    p = str(path)
+    try:
+        with open(p, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise OcctrackError("no such file", p) from None
+    except IsADirectoryError:
+        raise OcctrackError("is a directory, expected a TOML file", p) from None
+    except tomllib.TOMLDecodeError as err:
+        raise OcctrackError(f"not valid TOML: {err}", p) from None
+
+
+def _coerce(name: str, value, default):
+    """Check a TOML value against the type of the field's default."""
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise TypeError(f"{name} must be true or false, not {value!r}")
+        return value
+    if isinstance(default, str):
+        if not isinstance(value, str):
+            raise TypeError(f"{name} must be a string, not {value!r}")
+        return value
+    if isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise TypeError(f"{name} must be an integer, not {value!r}")
+        return value
+    if isinstance(default, tuple) or (default is None and isinstance(value, list | tuple)):
+        if not isinstance(value, list | tuple) or len(value) != 2 or not all(
+                isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+            raise TypeError(f"{name} must be a pair of numbers like [1.0, 2.0], not {value!r}")
+        return (float(value[0]), float(value[1]))
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise TypeError(f"{name} must be a number, not {value!r}")
+    return float(value)
