@@ -49,12 +49,12 @@ from __future__ import annotations
 import numpy as np
 
 from occtrack.association import lbp_marginals
+from occtrack.config import TrackerConfig
 from occtrack.models.birth import EdgeBirths
 from occtrack.models.box import BoxMeasurement, heights
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import OcclusionContext, OcclusionModel
-from occtrack.config import TrackerConfig
 
 N_BIRTH = 5
 LOG_FLOOR = -300.0
@@ -251,8 +251,12 @@ class GaussianMixturePMB:
         if M:
             log_hit = self.measurement.loglik(mean, cov, z, observed)
             if seen_hidden.any():
-                seen = det[:, None] * (1.0 - occ[:, None]
-                                       + (occ * v)[:, None] * (1.0 - seen_hidden))
+                # a source not yet confirmed is weighed like clutter, with the stationary o:
+                # were it taken as never occludable, a detection in a crowd would start a new
+                # track more easily than it is called clutter
+                o_seen = np.where(established, occ, c.occludability)
+                seen = det[:, None] * (1.0 - o_seen[:, None]
+                                       + (o_seen * v)[:, None] * (1.0 - seen_hidden))
                 log_hit += np.log(np.maximum(mass[:, None] * seen, 1e-300))
             else:
                 log_hit += np.log(np.maximum(mass * pd, 1e-300))[:, None]

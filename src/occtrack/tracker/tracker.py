@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from occtrack.config import TrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.io.mot import MotTable
 from occtrack.models.box import edges_from_ltwh, ltwh_from_states
@@ -26,7 +27,6 @@ from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.occlusion.boxes import box_occlusion
 from occtrack.progress import progress
 from occtrack.tracker.camera import estimate_shift
-from occtrack.config import TrackerConfig
 
 
 @dataclass(frozen=True)
