@@ -154,3 +154,15 @@ def test_json_file_is_kept_unless_forced(tmp_path, capsys):
                  "--quiet"]) == 0
     assert json.loads(out.read_text())["trackers"] == ["none"]
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_without_the_peers_extra(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(peers, "available", lambda: False)
+    seq = tmp_path / "SEQ"
+    make_sequence(seq, "SEQ")
+    assert main(["benchmark", str(seq), "--trackers", "none,bytetrack"]) == 2
+    assert 'pip install "occtrack[peers]"' in capsys.readouterr().err
+    assert main(["benchmark", str(seq), "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["trackers"] == list(MODELS)
+    assert "note: the peers" in captured.err and "occtrack[peers]" in captured.err
