@@ -17,8 +17,8 @@ cbiou; library defaults, the sequence's frame rate, every frame; BoT-SORT withou
 camera-motion step, which needs the images), score each result under the mot17 protocol
 (TrackEval) and print a table per sequence: HOTA, IDF1, MOTA, DetA, AssA, LocA, FP, FN, IDSW
 and the frames per second of the tracker call (scoring not counted). With more than one
-sequence follow TrackEval's COMBINED_SEQ scores (counts summed, HOTA and its parts from the
-summed counts, as MOTChallenge reports a benchmark) and the plain mean over sequences.
+sequence, two tables follow: TrackEval's COMBINED_SEQ scores (counts summed, HOTA and its parts
+from the summed counts, as MOTChallenge reports a benchmark) and the plain mean over sequences.
 
 A sequence folder holds det/det.txt (detections, rows in any frame order), gt/gt.txt and
 seqinfo.ini (image size, frame rate, length), as MOT17's do. The peers need the `peers` extra
