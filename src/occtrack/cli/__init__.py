@@ -14,6 +14,7 @@ from occtrack import __version__
 from occtrack.errors import OcctrackError
 
 COMMANDS = (
+    "benchmark",
     "demo",
     "eval",
     "foursquare",

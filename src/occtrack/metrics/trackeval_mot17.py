@@ -103,13 +103,43 @@ def preprocess(gt: MotTable, result: MotTable, num_frames: int
 def scores(data: dict) -> dict:
     """TrackEval's CLEAR, Identity and HOTA on a preprocessed sequence, under occtrack's keys.
     `hota` is the mean over TrackEval's 19 localisation thresholds, as its summary reports."""
+    values = summary(sequence_results(data))
+    return {key: values[key] for key in ("mota", "motp", "idf1", "hota", "mostly_tracked",
+                                         "mostly_lost", "fp", "fn", "id_switches")}
+
+
+def _metrics() -> dict:
+    return {"CLEAR": CLEAR(dict(_QUIET)), "Identity": Identity(dict(_QUIET)), "HOTA": HOTA()}
+
+
+def sequence_results(data: dict) -> dict:
+    """TrackEval's own per-sequence results ({"CLEAR": ..., "Identity": ..., "HOTA": ...}),
+    kept whole so that several sequences can be combined the way TrackEval combines them."""
     with _trackeval_errors():
-        clear = CLEAR(dict(_QUIET)).eval_sequence(data)
-        identity = Identity(dict(_QUIET)).eval_sequence(data)
-        hota = HOTA().eval_sequence(data)
+        return {name: metric.eval_sequence(data) for name, metric in _metrics().items()}
+
+
+def combined_results(per_sequence: list[dict]) -> dict:
+    """TrackEval's COMBINED_SEQ over several `sequence_results`: counts summed, HOTA's
+    association and localisation averaged with its true-positive weights, as its summary
+    does over a benchmark."""
+    if not per_sequence:
+        raise OcctrackError("no sequences to combine")
+    with _trackeval_errors():
+        return {name: metric.combine_sequences({str(i): res[name]
+                                                for i, res in enumerate(per_sequence)})
+                for name, metric in _metrics().items()}
+
+
+def summary(results: dict) -> dict:
+    """The headline numbers of `sequence_results` or `combined_results`: occtrack's keys plus
+    HOTA's parts (DetA, AssA, LocA), each HOTA number the mean over its 19 thresholds."""
+    clear, identity, hota = results["CLEAR"], results["Identity"], results["HOTA"]
     return {
         "mota": float(clear["MOTA"]), "motp": float(clear["MOTP"]),
         "idf1": float(identity["IDF1"]), "hota": float(np.mean(hota["HOTA"])),
+        "deta": float(np.mean(hota["DetA"])), "assa": float(np.mean(hota["AssA"])),
+        "loca": float(np.mean(hota["LocA"])),
         "mostly_tracked": int(clear["MT"]), "mostly_lost": int(clear["ML"]),
         "fp": int(clear["CLR_FP"]), "fn": int(clear["CLR_FN"]),
         "id_switches": int(clear["IDSW"]),

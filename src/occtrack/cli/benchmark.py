@@ -1,0 +1,90 @@
+"""`occtrack benchmark DIR`: occtrack and the box-only peers on every sequence folder in DIR."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+NAME = "benchmark"
+HELP = "occtrack's occlusion models and the peer trackers on MOTChallenge sequence folders"
+DESCRIPTION = """\
+Track every sequence folder under DIR (or DIR itself, if it is one) with occtrack under each
+occlusion model (none, measurement-wise, object-wise; every other setting the default) and
+with the box-only peers of Roboflow's `trackers` package (sort, bytetrack, ocsort, botsort,
+cbiou; library defaults, the sequence's frame rate, every frame; BoT-SORT without its
+camera-motion step, which needs the images), score each result under the mot17 protocol
+(TrackEval) and print a table per sequence: HOTA, IDF1, MOTA, DetA, AssA, LocA, FP, FN, IDSW
+and the frames per second of the tracker call (scoring not counted). With more than one
+sequence, two tables follow: TrackEval's COMBINED_SEQ scores (counts summed, HOTA and its parts
+from the summed counts, as MOTChallenge reports a benchmark) and the plain mean over sequences.
+
+A sequence folder holds det/det.txt (detections, rows in any frame order), gt/gt.txt and
+seqinfo.ini (image size, frame rate, length), as MOT17's do. The peers need the `peers` extra
+(pip install "occtrack[peers]"); without it they are left out with a note.
+
+--json FILE writes one JSON object to FILE (replaced atomically; `--json -` prints it instead
+of the tables):
+  {"protocol": "mot17", "trackers": [names],
+   "sequences": {NAME: {"folder", "frames", "fps", "image_size": [w, h],
+                        "trackers": {TRACKER: SCORES}}},
+   "combined": {"method", "trackers": {TRACKER: SCORES}},
+   "mean": {"method", "trackers": {TRACKER: {hota, idf1, mota, deta, assa, loca, motp}}}}
+SCORES holds hota, idf1, mota, motp, deta, assa, loca (fractions in [0, 1], MOTA can be
+negative), mostly_tracked, mostly_lost, fp, fn, id_switches, tracks (counts), seconds and
+frames_per_second of the tracker call.
+
+examples:
+  occtrack benchmark $OCCTRACK_DATA
+  occtrack benchmark MOT17-04-FRCNN --trackers measurement-wise,bytetrack,botsort
+  occtrack benchmark $OCCTRACK_DATA --json benchmark.json --quiet"""
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("root", metavar="DIR",
+                        help="a sequence folder, or a folder of sequence folders")
+    parser.add_argument("--trackers", metavar="LIST",
+                        help="comma list of trackers (default: none, measurement-wise, "
+                             "object-wise, and sort, bytetrack, ocsort, botsort, cbiou when "
+                             "the peers extra is installed)")
+    parser.add_argument("--json", metavar="FILE",
+                        help="write the scores as JSON to FILE (- prints them instead of the "
+                             "tables)")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing JSON file")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar, note or summary")
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from occtrack.errors import OcctrackError
+    from occtrack.experiments import benchmark
+    from occtrack.progress import summary
+
+    if args.json not in (None, "-") and Path(args.json).exists() and not args.force:
+        raise OcctrackError("exists already; pass --force to overwrite it", args.json)
+    if args.trackers is None:
+        trackers, note = benchmark.default_trackers()
+        if note and not args.quiet:
+            print(f"occtrack benchmark: note: {note}", file=sys.stderr)
+    else:
+        trackers = benchmark.parse_trackers(args.trackers)
+
+    start = time.perf_counter()
+    report = benchmark.benchmark(args.root, trackers, quiet=args.quiet)
+    seconds = time.perf_counter() - start
+
+    text = json.dumps(report, indent=2) + "\n"
+    if args.json == "-":
+        sys.stdout.write(text)
+    else:
+        if args.json is not None:
+            benchmark.write_atomic(args.json, text)
+        print(benchmark.format_report(report))
+    if not args.quiet:
+        frames = sum(entry["frames"] for entry in report["sequences"].values()) * len(trackers)
+        tracks = sum(values["tracks"] for values in report["combined"]["trackers"].values())
+        print(summary(frames, tracks, seconds),
+              file=sys.stderr if args.json == "-" else sys.stdout)
+    return 0

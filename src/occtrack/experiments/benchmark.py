@@ -1,0 +1,220 @@
+"""occtrack's occlusion models against the box-only peers, on every sequence of a folder.
+
+One number per tracker and sequence is what decides whether occlusion reasoning pays: each
+sequence is tracked by occtrack under every occlusion model (all other settings the defaults)
+and by the peers of `occtrack.peers` (library defaults, the sequence's frame rate), all on the
+same detection file, and scored by the same code (`mot17` protocol, TrackEval). The combined
+scores are TrackEval's own COMBINED_SEQ, the way MOTChallenge reports a benchmark; the plain
+mean over sequences is given beside them, because one identity event in one sequence can move
+a combined number.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from occtrack import peers
+from occtrack.errors import OcctrackError
+from occtrack.io.mot import MotTable, read_mot, read_seqinfo
+from occtrack.metrics.protocols import scored_frames
+from occtrack.metrics.trackeval_mot17 import combined_results, sequence_results, summary
+from occtrack.progress import progress
+from occtrack.tracker import Tracker, TrackerConfig
+
+MODELS = ("none", "measurement-wise", "object-wise")
+PROTOCOL = "mot17"
+COMBINED_METHOD = ("TrackEval COMBINED_SEQ: counts summed over sequences, DetA, AssA, LocA and "
+                   "HOTA from the summed counts and HOTA_TP-weighted averages, as MOTChallenge "
+                   "reports a benchmark")
+MEAN_METHOD = "plain mean over sequences of each sequence's number"
+
+COLUMNS = (("hota", "HOTA", ".3f"), ("idf1", "IDF1", ".3f"), ("mota", "MOTA", ".3f"),
+           ("deta", "DetA", ".3f"), ("assa", "AssA", ".3f"), ("loca", "LocA", ".3f"),
+           ("fp", "FP", "d"), ("fn", "FN", "d"), ("id_switches", "IDSW", "d"),
+           ("frames_per_second", "frames/s", ".0f"))
+FRACTIONS = ("hota", "idf1", "mota", "deta", "assa", "loca", "motp")
+
+
+@dataclass(frozen=True)
+class Sequence:
+    """One MOTChallenge sequence folder, read."""
+
+    name: str
+    folder: Path
+    width: int
+    height: int
+    fps: int
+    length: int
+    det: MotTable
+    gt: MotTable
+
+
+def all_trackers() -> tuple[str, ...]:
+    return MODELS + tuple(peers.PEERS)
+
+
+def default_trackers() -> tuple[list[str], str | None]:
+    """Every occlusion model, and every peer when `trackers` is installed; the note to print
+    when the peers are left out."""
+    if peers.available():
+        return list(all_trackers()), None
+    return list(MODELS), ("the peers (" + ", ".join(peers.PEERS) + ") are left out: "
+                          + peers.INSTALL_HINT)
+
+
+def parse_trackers(text: str) -> list[str]:
+    """A comma list of tracker names, checked, duplicates dropped, order kept."""
+    names = [part.strip() for part in text.split(",") if part.strip()]
+    if not names:
+        raise OcctrackError("--trackers names no tracker; choose from "
+                            + ", ".join(all_trackers()))
+    unknown = [name for name in names if name not in all_trackers()]
+    if unknown:
+        raise OcctrackError(f"unknown tracker {unknown[0]!r}; choose from "
+                            + ", ".join(all_trackers()))
+    if any(name in peers.PEERS for name in names) and not peers.available():
+        raise OcctrackError("the peer trackers need the `trackers` package; "
+                            + peers.INSTALL_HINT)
+    return list(dict.fromkeys(names))
+
+
+def _is_sequence(folder: Path) -> bool:
+    return (folder / "det" / "det.txt").is_file() and (folder / "gt" / "gt.txt").is_file()
+
+
+def find_sequences(root: str | os.PathLike) -> list[Path]:
+    """`root` itself if it is a sequence folder (det/det.txt and gt/gt.txt), else its
+    sub-folders that are, by name."""
+    folder = Path(root)
+    if not folder.is_dir():
+        raise OcctrackError("no such folder", str(folder))
+    if _is_sequence(folder):
+        return [folder]
+    found = sorted(sub for sub in folder.iterdir() if sub.is_dir() and _is_sequence(sub))
+    if not found:
+        raise OcctrackError("no sequence folder here: a sequence folder holds det/det.txt, "
+                            "gt/gt.txt and seqinfo.ini (e.g. MOT17-04-FRCNN/)", str(folder))
+    return found
+
+
+def load_sequence(folder: Path) -> Sequence:
+    info = read_seqinfo(folder)
+    det = read_mot(folder / "det" / "det.txt", "det")
+    gt = read_mot(folder / "gt" / "gt.txt", "gt")
+    n = int(info["length"])
+    for table, what in ((det, "detections"), (gt, "ground truth")):
+        if table.num_frames > n:
+            raise OcctrackError(f"{what} reach frame {table.num_frames} but seqinfo.ini says "
+                                f"seqLength={n}", table.path)
+    return Sequence(str(info["name"]), folder, int(info["width"]), int(info["height"]),
+                    int(info["fps"]), n, det, gt)
+
+
+def track(name: str, seq: Sequence) -> MotTable:
+    """Run one tracker, occtrack (by occlusion model) or a peer, on a whole sequence."""
+    if name in MODELS:
+        config = TrackerConfig.from_dict({"occlusion": name,
+                                          "image_size": (seq.width, seq.height),
+                                          "fps": seq.fps})
+        out = Tracker(config).run(seq.det, seq.length)
+        n = len(out.frame)
+        return MotTable(out.frame, out.id, out.box, out.existence, np.full(n, -1),
+                        np.full(n, -1.0), "<occtrack>")
+    return peers.track_peer(name, seq.det, seq.length, seq.fps)
+
+
+def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False) -> dict:
+    """Track and score every sequence under `root` with every tracker named; the report that
+    `--json` writes (see `occtrack benchmark --help` for its shape)."""
+    folders = find_sequences(root)
+    sequences = [load_sequence(folder) for folder in folders]
+    names = [seq.name for seq in sequences]
+    if len(set(names)) < len(names):
+        raise OcctrackError("two sequence folders share a name in seqinfo.ini", str(root))
+    if any(name in peers.PEERS for name in trackers):
+        peers.load()
+    jobs = [(seq, name) for seq in sequences for name in trackers]
+    raw: dict[str, list[dict]] = {name: [] for name in trackers}
+    seconds: dict[str, float] = dict.fromkeys(trackers, 0.0)
+    report: dict = {"protocol": PROTOCOL, "trackers": list(trackers), "sequences": {}}
+    for seq, name in progress(jobs, len(jobs), "benchmark", quiet):
+        start = time.perf_counter()
+        result = track(name, seq)
+        spent = time.perf_counter() - start
+        results = sequence_results(scored_frames(seq.gt, result, PROTOCOL, seq.length).trackeval)
+        raw[name].append(results)
+        seconds[name] += spent
+        entry = report["sequences"].setdefault(seq.name, {
+            "folder": str(seq.folder), "frames": seq.length, "fps": seq.fps,
+            "image_size": [seq.width, seq.height], "trackers": {}})
+        entry["trackers"][name] = {**summary(results), "tracks": int(len(np.unique(result.id))),
+                                   "seconds": spent,
+                                   "frames_per_second": seq.length / max(spent, 1e-9)}
+    frames = sum(seq.length for seq in sequences)
+    report["combined"] = {"method": COMBINED_METHOD, "trackers": {}}
+    report["mean"] = {"method": MEAN_METHOD, "trackers": {}}
+    for name in trackers:
+        per_seq = [report["sequences"][seq.name]["trackers"][name] for seq in sequences]
+        report["combined"]["trackers"][name] = {
+            **summary(combined_results(raw[name])),
+            "tracks": sum(values["tracks"] for values in per_seq),
+            "seconds": seconds[name], "frames_per_second": frames / max(seconds[name], 1e-9)}
+        report["mean"]["trackers"][name] = {
+            key: float(np.mean([values[key] for values in per_seq])) for key in FRACTIONS}
+    return report
+
+
+def _row(name: str, values: dict, columns=COLUMNS) -> str:
+    return f"  {name:<18}" + "".join(f"{format(values[key], fmt):>9}" for key, _, fmt in columns)
+
+
+def _header(columns=COLUMNS) -> str:
+    return f"  {'tracker':<18}" + "".join(f"{title:>9}" for _, title, _ in columns)
+
+
+def format_report(report: dict) -> str:
+    """The tables `occtrack benchmark` prints: one per sequence, then the combined scores and
+    the mean over sequences."""
+    lines = ["Protocol mot17 (TrackEval: MotChallenge2DBox preprocessing, IoU >= 0.5); "
+             "HOTA, DetA, AssA and LocA are means over the 19 localisation thresholds; "
+             "frames/s is the tracker call alone."]
+    for name, entry in report["sequences"].items():
+        w, h = entry["image_size"]
+        lines += ["", f"{name} ({w}x{h}, {entry['fps']} fps, {entry['frames']} frames)",
+                  _header()]
+        lines += [_row(tracker, values) for tracker, values in entry["trackers"].items()]
+    count = len(report["sequences"])
+    if count > 1:
+        lines += ["", f"Combined over {count} sequences ({report['combined']['method']}):",
+                  _header()]
+        lines += [_row(tracker, values)
+                  for tracker, values in report["combined"]["trackers"].items()]
+        mean_columns = [c for c in COLUMNS if c[0] in FRACTIONS]
+        lines += ["", f"Mean over {count} sequences ({report['mean']['method']}):",
+                  _header(mean_columns)]
+        lines += [_row(tracker, values, mean_columns)
+                  for tracker, values in report["mean"]["trackers"].items()]
+    return "\n".join(lines)
+
+
+def write_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write `text` to `path` through a temporary file in the same folder, so that a reader
+    never sees half a file and an interrupted run leaves the old one."""
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise OcctrackError("folder does not exist", str(folder))
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
