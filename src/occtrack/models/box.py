@@ -9,9 +9,9 @@ with e the noise of each edge in units of the box's height h_k = 2 s_vertical of
 (the paper's 12 px is e = 0.069 at MOT17-04's median height of 175 px): a detector's error
 grows with the object's image size, so one e serves near and far people and every camera.
 A detector clips boxes to the image, so an edge lying on the border (within `border_margin`
-pixels) says only that the true edge is at or beyond it: the Kalman update uses the edges that are measured, and the likelihood of a
-border edge is the probability that the object's edge lies beyond the border,
-Phi((border - zhat) / sqrt(S)) for a low edge, scaled by the noise's peak density
+pixels) says only that the true edge is at or beyond it: the Kalman update uses the edges
+that are measured, and the likelihood of a border edge is the probability that the object's
+edge lies beyond the border, Phi((border - zhat) / sqrt(S)) for a low edge, scaled by the noise's peak density
 1 / (sqrt(2 pi) e h_k) so that censored and measured edges share the units of the clutter
 density (a border edge counts as a measured edge that matched as well as it could have).
 
