@@ -12,8 +12,9 @@ A detector clips boxes to the image, so an edge lying on the border (within `bor
 pixels) says only that the true edge is at or beyond it: the Kalman update uses the edges
 that are measured, and the likelihood of a border edge is the probability that the object's
 edge lies beyond the border, Phi((border - zhat) / sqrt(S)) for a low edge, scaled by the
-noise's peak density 1 / (sqrt(2 pi) e h_k) so that censored and measured edges share the units of the clutter
-density (a border edge counts as a measured edge that matched as well as it could have).
+noise's peak density 1 / (sqrt(2 pi) e h_k) so that censored and measured edges share the
+units of the clutter density (a border edge counts as a measured edge that matched as well
+as it could have).
 
 Measurements travel as edge arrays z of shape (M, 2, 2): z[:, axis, 0] is the low edge and
 z[:, axis, 1] the high edge, axis 0 horizontal and 1 vertical.
