@@ -29,12 +29,9 @@ def test_environment_variable_is_searched(tmp_path, monkeypatch):
     assert find_sequence() == seq
 
 
-def test_json_on_mot17(capsys):
-    try:
-        find_sequence()
-    except OcctrackError:
-        pytest.skip("MOT17-04 ground truth not present")
-    assert main(["reproduce", "table2", "--json", "--no-norfair", "--quiet"]) == 0
+def test_json_on_mot17(capsys, mot17_04):
+    data = str(mot17_04.parent)
+    assert main(["reproduce", "table2", "--data", data, "--json", "--no-norfair", "--quiet"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert list(data) == ["paper", "mot17"]
     for protocol, rows in data.items():
