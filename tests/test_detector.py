@@ -21,7 +21,6 @@ from occtrack.scenarios.detector import (
     simulate_detections,
 )
 
-MOT17_04 = Path("/work/shared/data/mot17/MOT17-04-FRCNN/gt/gt.txt")
 EXACT = dict(person_std=0.0, noise_std=0.0, edge_noise_x=0.0, edge_noise_y=0.0,
              false_positive_rate=0.0)
 
@@ -244,9 +243,8 @@ def test_bad_config_is_an_occtrack_error():
         DetectorConfig(bias=3.0, person_classes=(1, 7))
 
 
-@pytest.mark.skipif(not MOT17_04.is_file(), reason="MOT17-04 ground truth not present")
-def test_calibrated_on_mot17_04():
-    gt = read_mot(MOT17_04, "gt")
+def test_calibrated_on_mot17_04(mot17_04_gt):
+    gt = read_mot(mot17_04_gt, "gt")
     det = simulate_detections(gt, 0, image_size=(1920, 1080))
     recall, precision = detection_recall_precision(gt, det)
     assert 0.55 <= recall <= 0.65

@@ -19,10 +19,6 @@ from occtrack.metrics.clear import clear_mot, clear_mot_motmetrics, iou_distance
 from occtrack.metrics.evaluate import KEYS, evaluate, gospa_per_frame
 from occtrack.metrics.protocols import scored_frames
 
-MOT17_04 = Path(__file__).resolve().parents[2] / "shared/data/mot17/MOT17-04-FRCNN/gt/gt.txt"
-if not MOT17_04.is_file():
-    MOT17_04 = Path("/work/shared/data/mot17/MOT17-04-FRCNN/gt/gt.txt")
-
 # Two pedestrians, three frames. Result: 10 follows pedestrian 1 for two frames, 20 follows
 # pedestrian 2 shifted by 2 px (IoU 8/12), 30 is a false box in frame 2, and in frame 3 track 20
 # jumps onto pedestrian 1 while pedestrian 2 is not reported.
@@ -363,9 +359,8 @@ def test_cli_help_says_how_each_protocol_scores(capsys):
         assert phrase in text
 
 
-@pytest.mark.skipif(not MOT17_04.is_file(), reason="MOT17-04 ground truth not present")
-def test_mot17_04_ground_truth_against_itself(capsys):
-    code, out, err = run_cli(capsys, MOT17_04, MOT17_04, "--json")
+def test_mot17_04_ground_truth_against_itself(capsys, mot17_04_gt):
+    code, out, err = run_cli(capsys, mot17_04_gt, mot17_04_gt, "--json")
     values = json.loads(out)
     assert code == 0 and "not scored" in err
     assert (values["mota"], values["idf1"], values["hota"], values["motp"]) == (1.0, 1.0, 1.0,
@@ -373,7 +368,7 @@ def test_mot17_04_ground_truth_against_itself(capsys):
     assert (values["fp"], values["fn"], values["id_switches"], values["mostly_tracked"]) == (
         0, 0, 0, 83)
     assert values["gospa"] == 0.0 and values["cardinality_error"] == 0.0
-    gt = read_mot(MOT17_04, "gt")
+    gt = read_mot(mot17_04_gt, "gt")
     paper = evaluate(gt, gt, "paper", num_frames=1050)
     assert (paper["mota"], paper["motp"], paper["idf1"], paper["gospa"]) == (1.0, 0.0, 1.0, 0.0)
 

@@ -9,7 +9,8 @@ from fractions import Fraction as F
 import pytest
 
 from occtrack.cli import main
-from occtrack.scenarios.foursquare import OUTCOMES, FourSquare, table
+from occtrack.experiments.table1 import PAPER, paper_value
+from occtrack.scenarios.foursquare import OUTCOMES, QUANTITIES, FourSquare, table
 
 # Paper Table I, typed in from the paper: model -> quantity -> values for outcomes A..E.
 TABLE_I = {
@@ -44,8 +45,21 @@ def test_table_one_cell(paper_example, model, quantity, k):
         assert got[quantity] == F(expected)
 
 
-def test_all_45_cells_are_checked():
-    assert len(CELLS) == 45
+def test_all_45_cells_are_checked(paper_example):
+    """The engine computes 45 cells (3 models x 5 outcomes x 3 quantities, an impossible
+    outcome counting as its 3 cells), the module's own copy of the paper's table has the same
+    45, and the test above checks exactly those; the two typed-in copies agree."""
+    engine = {(model, quantity, outcome) for model, row in paper_example.items()
+              for outcome, values in row.items()
+              for quantity in (QUANTITIES if values is None else values)}
+    paper = {(model, quantity, outcome) for model, row in PAPER.items()
+             for quantity, values in row.items() for outcome, _ in zip(OUTCOMES, values,
+                                                                        strict=True)}
+    checked = {(model, quantity, "ABCDE"[k]) for model, quantity, k in CELLS}
+    assert len(engine) == 45 and engine == paper == checked
+    for model, quantity, outcome in engine:
+        ours = TABLE_I[model][quantity]["ABCDE".index(outcome)]
+        assert paper_value(model, outcome, quantity) == (None if ours is None else F(ours))
 
 
 def brute_force(p_correct: F, p_wrong: F, p_top: F, occlusion: str) -> dict:

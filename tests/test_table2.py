@@ -46,19 +46,10 @@ def test_missing_detection_file_is_named(tmp_path, capsys):
     assert str(seq / "det" / "det.txt") in err and "no such file" in err
 
 
-def _mot17_04():
-    try:
-        seq = find_sequence()
-    except OcctrackError:
-        pytest.skip("MOT17-04 not present (--data, $OCCTRACK_DATA or ../shared/data/mot17)")
-    if not (seq / "det" / "det.txt").is_file():
-        pytest.skip(f"{seq}/det/det.txt not present")
-    return seq
-
-
-def test_json_on_mot17_real_detections(capsys):
-    _mot17_04()
-    assert main(["reproduce", "table2", "--json", "--no-norfair", "--quiet"]) == 0
+def test_json_on_mot17_real_detections(capsys, mot17_04):
+    data = str(mot17_04.parent)
+    assert main(["reproduce", "table2", "--data", data, "--json", "--no-norfair",
+                 "--quiet"]) == 0
     captured = capsys.readouterr()
     data = json.loads(captured.out)
     expected = ["none", "measurement-wise", "object-wise"]

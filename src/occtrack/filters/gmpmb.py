@@ -304,7 +304,7 @@ class GaussianMixturePMB:
         j -= 1
         new_mass = children.ravel()[keep]
         if c.max_components_per_object:
-            trim = self._trim_objects(new_mass, label[parent])
+            trim = self._trim_objects(new_mass, label[parent], j)
             keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
         new_mean = mean[parent]
         new_cov = cov[parent]
@@ -388,11 +388,16 @@ class GaussianMixturePMB:
             keep.sort()
         return keep
 
-    def _trim_objects(self, mass: np.ndarray, label: np.ndarray) -> np.ndarray:
+    def _trim_objects(self, mass: np.ndarray, label: np.ndarray,
+                      measurement: np.ndarray) -> np.ndarray:
         """Which children to keep when each Bernoulli keeps at most `max_components_per_object`
         (its heaviest); the kept ones are scaled up so that its existence is unchanged, only
-        its density loses the tail. `mass` is scaled in place."""
+        its density loses the tail. `mass` is scaled in place. A Bernoulli born this step is
+        the Poisson part's hit children of its measurement (label -1, `measurement` j >= 0);
+        the Poisson part's miss children (j = -1) are an intensity and are not trimmed."""
         cap = self.config.max_components_per_object
+        born = (label < 0) & (measurement >= 0)
+        label = np.where(born, len(self.slot_used) + measurement, label)
         order = np.lexsort([-mass, label])
         grouped = label[order]
         start = np.flatnonzero(np.diff(grouped, prepend=grouped[:1] - 1))

@@ -1,0 +1,55 @@
+"""Where the tests find MOT17, and what a test does when its data is missing.
+
+Data-dependent tests look where the commands look: `OCCTRACK_DATA`, else `../shared/data/mot17`
+beside this checkout (never an absolute path). Without the data a test skips on a developer's
+machine, but fails in CI (`CI=true`): a CI run that quietly tested nothing must not pass.
+Tests of optional extras (norfair's environment, `pytest.importorskip`) still skip, with a
+reason, everywhere."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from occtrack.errors import OcctrackError
+from occtrack.io.data import SEQUENCE, find_sequence
+
+CHECKOUT = Path(__file__).resolve().parents[1]
+
+
+def in_ci() -> bool:
+    return os.environ.get("CI", "").strip().lower() in ("1", "true", "yes")
+
+
+def data_missing(reason: str) -> None:
+    """Skip the calling test, or fail it in CI."""
+    if in_ci():
+        pytest.fail(f"{reason}\n(CI=true: a test that needs data must find it in CI)",
+                    pytrace=False)
+    pytest.skip(reason)
+
+
+def mot17_root() -> tuple[Path, str]:
+    """The folder searched for MOT17 sequences, and where that choice came from."""
+    if os.environ.get("OCCTRACK_DATA"):
+        return Path(os.environ["OCCTRACK_DATA"]), "OCCTRACK_DATA"
+    return CHECKOUT.parent / "shared" / "data" / "mot17", "../shared/data/mot17 of the checkout"
+
+
+@pytest.fixture(scope="session")
+def mot17_04() -> Path:
+    """The MOT17-04 sequence folder (gt/gt.txt, seqinfo.ini); skip, or fail in CI, without it."""
+    root, origin = mot17_root()
+    try:
+        return find_sequence(root, SEQUENCE)
+    except OcctrackError:
+        pass
+    data_missing(f"MOT17 data not found: no {SEQUENCE}/gt/gt.txt and seqinfo.ini in {root} "
+                 f"({origin}); set OCCTRACK_DATA to the folder that holds the sequence folders")
+
+
+@pytest.fixture(scope="session")
+def mot17_04_gt(mot17_04) -> Path:
+    return mot17_04 / "gt" / "gt.txt"
