@@ -53,7 +53,7 @@ def test_track_writes_a_result_file_and_a_summary(sequence, tmp_path, capsys):
 def test_track_refuses_to_overwrite(sequence, tmp_path, capsys):
     out = tmp_path / "result.txt"
     out.write_text("keep me\n")
-    assert main(["track", str(sequence / "det" / "det.txt"), "-o", str(out)]) == 2
+    assert main(["track", str(sequence / "det" / "det.txt"), "-o", str(out)]) == 1
     assert "exists already" in capsys.readouterr().err
     assert out.read_text() == "keep me\n"
 
@@ -63,7 +63,7 @@ def test_malformed_detection_line_is_named(tmp_path, capsys):
     det.write_text("1,-1,10,10,30,90,0.9\n1,-1,10,10,thirty,90,0.9\n")
     code = main(["track", str(det), "--image-size", "640x480", "-o", str(tmp_path / "r.txt")])
     err = capsys.readouterr().err.strip()
-    assert code == 2
+    assert code == 1
     assert err == f"occtrack track: error: {det}:2: column 5 is not a number: 'thirty'"
     assert not (tmp_path / "r.txt").exists()
 
@@ -71,7 +71,7 @@ def test_malformed_detection_line_is_named(tmp_path, capsys):
 def test_image_size_is_required_without_seqinfo(tmp_path, capsys):
     det = tmp_path / "det.txt"
     det.write_text("1,-1,10,10,30,90,0.9\n")
-    assert main(["track", str(det), "-o", str(tmp_path / "r.txt")]) == 2
+    assert main(["track", str(det), "-o", str(tmp_path / "r.txt")]) == 1
     assert "image size unknown: pass --image-size WxH" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exit_:
         main(["track", str(det), "--image-size", "640by480", "-o", str(tmp_path / "r.txt")])
@@ -87,7 +87,7 @@ def test_config_file_settings_and_errors(sequence, tmp_path, capsys):
                  "-o", str(out), "--quiet"]) == 0
     config.write_text("capacity = -4\n")
     assert main(["track", str(sequence / "det" / "det.txt"), "--config", str(config),
-                 "-o", str(out), "--force"]) == 2
+                 "-o", str(out), "--force"]) == 1
     assert f"{config}: capacity must be at least 16" in capsys.readouterr().err
 
 
@@ -109,5 +109,5 @@ def test_demo_prints_scores_for_the_three_models(tmp_path, capsys):
         assert 0 < s["idf1"] <= 1 and s["mota"] <= 1 and s["gospa_per_frame"] >= 0
     assert 0 < scores["detector"]["recall"] <= 1
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert main(["demo", "--frames", "10", "--figure", str(figure)]) == 2
+    assert main(["demo", "--frames", "10", "--figure", str(figure)]) == 1
     assert "exists already; pass --force" in capsys.readouterr().err

@@ -84,7 +84,7 @@ def test_cli_refuses_to_overwrite_and_rejects_unknown_settings(tmp_path, capsys)
     gt_file, out = tmp_path / "gt.txt", tmp_path / "det.txt"
     write_gt(gt_file, crowd(n_frames=3))
     out.write_text("keep me\n")
-    assert main(["simulate-detections", str(gt_file), "-o", str(out)]) == 2
+    assert main(["simulate-detections", str(gt_file), "-o", str(out)]) == 1
     assert "exists already" in capsys.readouterr().err
     assert out.read_text() == "keep me\n"
     assert main(["simulate-detections", str(gt_file), "-o", str(out), "--force",
@@ -94,11 +94,11 @@ def test_cli_refuses_to_overwrite_and_rejects_unknown_settings(tmp_path, capsys)
     config = tmp_path / "det.toml"
     config.write_text("[detector]\nbias = 2.0\nbogus = 1\n")
     assert main(["simulate-detections", str(gt_file), "-o", str(out), "--force",
-                 "--config", str(config)]) == 2
+                 "--config", str(config)]) == 1
     assert "unknown detector setting(s) bogus" in capsys.readouterr().err
     config.write_text("nms_order = 'sideways'\n")
     assert main(["simulate-detections", str(gt_file), "-o", str(out), "--force",
-                 "--config", str(config)]) == 2
+                 "--config", str(config)]) == 1
     assert "nms_order" in capsys.readouterr().err
 
 

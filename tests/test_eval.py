@@ -329,19 +329,19 @@ def test_cli_seqinfo_length_and_errors(tmp_path, capsys):
                                        "seqLength=2\nframeRate=30\n")
     result = write(tmp_path, "result.txt", RESULT)
     code, _, err = run_cli(capsys, gt, result)
-    assert code == 2
+    assert code == 1
     assert err.startswith("occtrack eval: error: ") and "frame 3 but the sequence has 2" in err
     assert err.count("\n") == 1
 
     code, _, err = run_cli(capsys, gt, tmp_path / "missing.txt")
-    assert code == 2 and err == f"occtrack eval: error: {tmp_path / 'missing.txt'}: no such file\n"
+    assert code == 1 and err == f"occtrack eval: error: {tmp_path / 'missing.txt'}: no such file\n"
 
     bad = write(tmp_path, "bad.txt", "1,10,0,0,10,10,1\n2,10,0,zero,10,10,1\n")
     code, _, err = run_cli(capsys, gt, bad)
-    assert code == 2 and f"{bad}:2: column 4 is not a number" in err
+    assert code == 1 and f"{bad}:2: column 4 is not a number" in err
 
     code, _, err = run_cli(capsys, gt, result, "--frames", "0")
-    assert code == 2 and "--frames must be at least 1" in err
+    assert code == 1 and "--frames must be at least 1" in err
 
     with pytest.raises(SystemExit) as exit_:
         run_cli(capsys, gt, result, "--protocol", "mot16")

@@ -152,20 +152,20 @@ def test_other_parameters_marked_not_comparable(capsys):
     assert "P(own square) = 3/5" in out and "only for its own parameters" in out
 
 
-@pytest.mark.parametrize("args,message", [
-    (["--p-correct", "-0.1"], "outside [0, 1]"),
-    (["--p-top", "3/2"], "outside [0, 1]"),
-    (["--p-wrong", "abc"], "is not a probability"),
-    (["--p-wrong", "nan"], "is not a probability"),
-    (["--p-top", "1/0"], "is not a probability"),
-    (["--p-correct", "0.8", "--p-wrong", "0.3"], "exceeds 1"),
+@pytest.mark.parametrize("args,message,status", [
+    (["--p-correct", "-0.1"], "outside [0, 1]", 2),
+    (["--p-top", "3/2"], "outside [0, 1]", 2),
+    (["--p-wrong", "abc"], "is not a probability", 2),
+    (["--p-wrong", "nan"], "is not a probability", 2),
+    (["--p-top", "1/0"], "is not a probability", 2),
+    (["--p-correct", "0.8", "--p-wrong", "0.3"], "exceeds 1", 1),
 ])
-def test_invalid_probabilities(capsys, args, message):
+def test_invalid_probabilities(capsys, args, message, status):
     try:
         code = main(["foursquare", *args])
-    except SystemExit as exc:  # argparse rejects a bad value itself
+    except SystemExit as exc:  # argparse rejects a bad value itself: a usage error
         code = exc.code
-    assert code == 2
+    assert code == status
     assert message in capsys.readouterr().err
 
 
@@ -173,5 +173,5 @@ def test_figure_written_and_not_overwritten(tmp_path, capsys):
     path = tmp_path / "fs.png"
     assert main(["foursquare", "--figure", str(path)]) == 0
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert main(["foursquare", "--figure", str(path)]) == 2
+    assert main(["foursquare", "--figure", str(path)]) == 1
     assert "exists already" in capsys.readouterr().err

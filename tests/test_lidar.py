@@ -78,7 +78,7 @@ def test_cli_prints_derived_and_simulated(capsys):
 
 
 def test_cli_rejects_bad_settings(capsys):
-    assert main(["lidar", "--p-d", "1.5"]) == 2
+    assert main(["lidar", "--p-d", "1.5"]) == 1
     assert "p_d must lie in [0, 1]" in capsys.readouterr().err
-    assert main(["lidar", "--range", "80"]) == 2
+    assert main(["lidar", "--range", "80"]) == 1
     assert "--range must lie inside" in capsys.readouterr().err

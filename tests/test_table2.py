@@ -15,7 +15,7 @@ from occtrack.metrics.protocols import KEYS
 
 
 def test_missing_data_is_explained(tmp_path, capsys):
-    assert main(["reproduce", "table2", "--data", str(tmp_path)]) == 2
+    assert main(["reproduce", "table2", "--data", str(tmp_path)]) == 1
     err = capsys.readouterr().err
     assert "MOT17 data not found" in err and str(tmp_path) in err and "--data" in err
 

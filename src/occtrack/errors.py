@@ -4,7 +4,7 @@ from __future__ import annotations
 
 
 class OcctrackError(Exception):
-    """Bad input or configuration. The CLI prints it as one line and exits with status 2."""
+    """Bad input or configuration. The CLI prints it as one line and exits with status 1."""
 
     def __init__(self, message: str, path: str | None = None, line: int | None = None):
         self.message = message

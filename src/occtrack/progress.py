@@ -6,13 +6,13 @@ import sys
 from collections.abc import Iterable, Iterator
 from typing import TypeVar
 
-from tqdm import tqdm
-
 T = TypeVar("T")
 
 
 def progress(items: Iterable[T], total: int | None = None, desc: str = "",
              quiet: bool = False) -> Iterator[T]:
+    from tqdm import tqdm
+
     disable = quiet or not sys.stderr.isatty()
     yield from tqdm(items, total=total, desc=desc, disable=disable, leave=False,
                     file=sys.stderr, dynamic_ncols=True)

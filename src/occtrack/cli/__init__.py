@@ -1,13 +1,27 @@
 """The `occtrack` command: one console script, one module per subcommand.
 
-Each module in COMMANDS defines NAME, HELP (one line), `configure(parser)` and `run(args) -> int`.
-Adding a subcommand is adding a module and its name here; nothing else changes.
+Each module in COMMANDS defines NAME, HELP (one line), DESCRIPTION (optional),
+`configure(parser)` and `run(args) -> int`. Adding a subcommand is adding a module and its name
+here; nothing else changes.
+
+Startup stays instant because of two rules. A subcommand module imports at its top only light
+modules (the standard library, `occtrack.errors`, `occtrack.cli.arguments`, and text such as
+`occtrack.metrics.protocol_text`): never numpy, scipy, matplotlib, TrackEval, motmetrics or the
+tracker, which `run(args)` imports when it runs (`occtrack --help` imports every subcommand
+module to list them). And `configure(parser)` is called only for the subcommand being run, so
+it may import what its options need, though that slows that subcommand's `--help`.
+tests/test_cli_errors.py checks both for the commands that exist.
+
+Every failure the user can fix ends in one line on stderr naming the file and what to do, with
+the exit status in EXIT_STATUS; `--debug` shows the traceback instead.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
+import os
 import sys
 
 from occtrack import __version__
@@ -25,38 +39,128 @@ COMMANDS = (
     "track",
 )
 
+BAD_INPUT, USAGE, INTERRUPTED = 1, 2, 130
 
-def build_parser() -> argparse.ArgumentParser:
+EXIT_STATUS = f"""\
+exit status:
+  0    success
+  {BAD_INPUT}    bad input or a failure outside occtrack (a malformed or missing
+       file, no permission, a full disk, out of memory): one line on stderr
+       names the file and what to do
+  {USAGE}    usage: an unknown option or a bad option value
+  {INTERRUPTED}  interrupted (Ctrl-C)
+Output files are written whole or not at all: a failed or interrupted run leaves
+the old file, or none, never a partial one. --debug, given before the
+subcommand (occtrack --debug track ...), shows the traceback of a failure."""
+
+_OS_ADVICE = {
+    errno.EACCES: "check the permissions of the file and its folder, or use another path",
+    errno.EPERM: "check the permissions of the file and its folder, or use another path",
+    errno.ENOSPC: "free some space or write to another disk",
+    errno.EDQUOT: "free some space or write to another disk",
+    errno.EROFS: "write to a writable folder",
+    errno.ENOENT: "check the path",
+    errno.EISDIR: "give a file, not a folder",
+    errno.ENOTDIR: "a part of the path is a file, not a folder; check the path",
+    errno.ENAMETOOLONG: "use a shorter path",
+    errno.EMFILE: "raise the open-file limit (ulimit -n)",
+}
+
+
+def _command_of(argv: list[str]) -> str | None:
+    """The subcommand named in argv: the first word that is not an option (occtrack's own
+    options take no value)."""
+    for word in argv:
+        if word == "--":
+            return None
+        if not word.startswith("-"):
+            return word
+    return None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The whole parser, with the options of `command` only (every subcommand's when
+    `command` is "*"), so that `occtrack --help` runs no subcommand's `configure`."""
     parser = argparse.ArgumentParser(
         prog="occtrack",
         description="Occlusion-aware multi-object tracking (measurement-wise and object-wise "
                     "occlusion in a Poisson multi-Bernoulli tracker).",
+        epilog=EXIT_STATUS, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"occtrack {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the traceback of a failure instead of a one-line message")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         module = importlib.import_module(f"occtrack.cli.{name}")
         p = sub.add_parser(module.NAME, help=module.HELP,
                            description=getattr(module, "DESCRIPTION", module.HELP),
+                           epilog=EXIT_STATUS,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-        module.configure(p)
-        p.set_defaults(_run=module.run)
+        if command in (module.NAME, "*"):
+            module.configure(p)
+            p.set_defaults(_run=module.run)
     return parser
 
 
+def _os_message(err: OSError) -> str:
+    where = f"{err.filename}: " if err.filename is not None else ""
+    what = err.strerror or str(err)
+    advice = _OS_ADVICE.get(err.errno)
+    return f"{where}{what[:1].lower()}{what[1:]}" + (f"; {advice}" if advice else "")
+
+
+def explain(err: BaseException, config: str | None = None) -> str:
+    """One line for a failure: where, what, and what to do. `config` is the settings file
+    the run was given, if any, the likely culprit of running out of memory."""
+    if isinstance(err, OcctrackError):
+        return str(err)
+    if isinstance(err, OSError):
+        return _os_message(err)
+    if isinstance(err, UnicodeDecodeError):
+        return (f"an input is not UTF-8 text (byte {err.start}: {err.reason}); save it as "
+                f"UTF-8")
+    if type(err).__name__ == "TOMLDecodeError":
+        return f"a settings file is not valid TOML: {err}"
+    if isinstance(err, MemoryError):
+        where = f"{config}: " if config else ""
+        return (f"{where}out of memory; lower the sizes set in the configuration "
+                f"(capacity, max_labels, particles, ...) or give the run more memory")
+    return (f"internal error: {type(err).__name__}: {err}; this is a bug in occtrack, please "
+            f"report it with the output of the same command run as occtrack --debug ...")
+
+
+def _quiet_stdout() -> None:
+    """After a closed pipe (occtrack ... | head), send what is left to /dev/null so that
+    Python's exit does not complain about the lost output."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command_of(argv))
     args = parser.parse_args(argv)
     if not hasattr(args, "_run"):
         parser.print_help()
-        return 2
+        return USAGE
+    prog = f"occtrack {args.command}"
     try:
         return int(args._run(args) or 0)
-    except OcctrackError as err:
-        print(f"occtrack {args.command}: error: {err}", file=sys.stderr)
-        return 2
     except BrokenPipeError:
+        _quiet_stdout()
         return 0
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+        if args.debug:
+            raise
+        print(f"{prog}: interrupted; output files are left as they were", file=sys.stderr)
+        return INTERRUPTED
+    except Exception as err:
+        if args.debug:
+            raise
+        config = getattr(args, "config", None)
+        print(f"{prog}: error: {explain(err, config and str(config))}", file=sys.stderr)
+        return BAD_INPUT

@@ -22,5 +22,8 @@ def whole_number(minimum: int) -> Callable[[str], int]:
     return parse
 
 
+DAY_AT_30_FPS = 24 * 3600 * 30
+"""Default bound on a run of empty frames: a day of video at the usual MOTChallenge rate."""
+
 positive_int = whole_number(1)
 seed_int = whole_number(0)

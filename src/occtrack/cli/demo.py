@@ -6,14 +6,15 @@ import argparse
 import json
 import time
 import warnings
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from occtrack.cli.arguments import positive_int
-from occtrack.metrics.gospa import gospa, iou
-from occtrack.scenarios.pedestrians import Crowd, Scene, crowd_scene
-from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig, TrackResult
-from occtrack.viz.frame import check_new
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from occtrack.scenarios.pedestrians import Scene
+    from occtrack.tracker import TrackResult
 
 NAME = "demo"
 HELP = "track a built-in synthetic street scene with none, object-wise and measurement-wise " \
@@ -63,6 +64,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def score(scene: Scene, result: TrackResult) -> dict:
     """MOTA, IDF1 and ID switches (motmetrics, IoU >= 0.5) and GOSPA per frame."""
     import motmetrics as mm
+    import numpy as np
+
+    from occtrack.metrics.gospa import gospa, iou
 
     acc = mm.MOTAccumulator(auto_id=True)
     total = 0.0
@@ -82,6 +86,8 @@ def score(scene: Scene, result: TrackResult) -> dict:
 
 
 def _slices(frames: np.ndarray, n: int) -> list[np.ndarray]:
+    import numpy as np
+
     order = np.argsort(frames, kind="stable")
     bounds = np.searchsorted(frames[order], np.arange(1, n + 2))
     return [order[bounds[f]:bounds[f + 1]] for f in range(n)]
@@ -90,6 +96,8 @@ def _slices(frames: np.ndarray, n: int) -> list[np.ndarray]:
 def detector_figures(scene: Scene) -> dict:
     """Recall and precision of the detections against the truth (IoU >= 0.5)."""
     from scipy.optimize import linear_sum_assignment
+
+    from occtrack.metrics.gospa import iou
 
     matched = 0
     for t, d in zip(scene.truth.frame_slices(scene.frames),
@@ -103,6 +111,12 @@ def detector_figures(scene: Scene) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from occtrack.scenarios.pedestrians import Crowd, crowd_scene
+    from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig
+    from occtrack.viz.frame import check_new
+
     if args.figure:
         check_new(args.figure, args.force)
     crowd = Crowd(people=args.people, frames=args.frames)
@@ -149,6 +163,10 @@ def _hidden(scene: Scene) -> np.ndarray:
 def _telling_frame(scene: Scene, results: dict) -> int:
     """A tracked frame where the measurement-wise tracker covers the most hidden people that
     the tracker without occlusion does not (ties: the most hidden people)."""
+    import numpy as np
+
+    from occtrack.metrics.gospa import iou
+
     hidden = _hidden(scene)
     best, best_key = 1, (-1, -1)
     for f in range(1, scene.frames + 1, 2):
@@ -168,6 +186,8 @@ def _telling_frame(scene: Scene, results: dict) -> int:
 
 def _window(scene: Scene, frame: int) -> tuple[float, float, float, float]:
     """A quarter of the image around the frame's hidden people (or its centre)."""
+    import numpy as np
+
     W, H = scene.image_size
     rows = np.flatnonzero(_hidden(scene) & (scene.truth.frame == frame))
     if len(rows):

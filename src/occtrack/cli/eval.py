@@ -7,10 +7,10 @@ import json
 import sys
 import time
 
+from occtrack.cli.arguments import DAY_AT_30_FPS, whole_number
 from occtrack.errors import OcctrackError
-from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo
-from occtrack.metrics import protocols
-from occtrack.metrics.protocols import KEYS
+from occtrack.metrics import protocol_text as protocols
+from occtrack.metrics.protocol_text import KEYS
 
 NAME = "eval"
 HELP = "score a result file against ground truth (CLEAR MOT, IDF1, HOTA, GOSPA)"
@@ -18,8 +18,9 @@ DESCRIPTION = f"""\
 Score a tracker's MOTChallenge result file against a ground-truth file and print MOTA, MOTP,
 IDF1, HOTA, mostly tracked / lost, FP, FN, ID switches, GOSPA and the cardinality error.
 
-Files are read as TrackEval reads them (comma or space separated, CRLF line ends, float ids
-and frames truncated, extra columns ignored); a malformed row stops with its file and line.
+Files are read as TrackEval reads them (comma or space separated, CRLF line ends, frames and
+ids written 3 or 3.0, extra columns ignored); a malformed row, such as a frame of 2.5, stops
+with its file and line.
 The sequence length is the ground truth's seqinfo.ini (SEQ/gt/gt.txt layout), --frames, or the
 last frame in either file; result ids must be unique within a frame.
 
@@ -86,6 +87,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frames", type=int, metavar="N",
                         help="sequence length (default: seqLength from the ground truth's "
                              "seqinfo.ini, else the last frame in either file)")
+    parser.add_argument("--max-gap-frames", type=whole_number(0), metavar="N",
+                        default=DAY_AT_30_FPS,
+                        help="when the sequence length is unknown, refuse more than N empty "
+                             "frames in a row in either file, so that a stray frame number "
+                             "cannot make the scoring walk billions of frames (default "
+                             f"{DAY_AT_30_FPS}, a day at 30 fps)")
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object instead of the table")
 
@@ -95,6 +102,8 @@ def _num_frames(args: argparse.Namespace) -> int | None:
         if args.frames < 1:
             raise OcctrackError(f"--frames must be at least 1, got {args.frames}")
         return args.frames
+    from occtrack.io.mot import find_seqinfo, read_seqinfo
+
     folder = find_seqinfo(args.gt)
     return int(read_seqinfo(folder)["length"]) if folder is not None else None
 
@@ -110,12 +119,15 @@ def _format(key: str, value) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from occtrack.io.mot import read_mot
+    from occtrack.metrics import protocols
     from occtrack.metrics.evaluate import evaluate_frames
 
     start = time.perf_counter()
-    gt = read_mot(args.gt, "gt")
-    result = read_mot(args.result, "result")
     num_frames = _num_frames(args)
+    gap = args.max_gap_frames if num_frames is None else None
+    gt = read_mot(args.gt, "gt", max_gap_frames=gap)
+    result = read_mot(args.result, "result", max_gap_frames=gap)
     left_out = int(protocols.result_classes_left_out(result, args.protocol).sum())
     if left_out:
         print(f"occtrack eval: note: {left_out} of {len(result)} result rows name a class other "

@@ -8,8 +8,6 @@ from fractions import Fraction
 from pathlib import Path
 
 from occtrack.errors import OcctrackError
-from occtrack.experiments.table1 import as_json, format_table
-from occtrack.scenarios.foursquare import FourSquare, table
 
 NAME = "foursquare"
 HELP = "exact posteriors of the paper's four-square example (Table I)"
@@ -57,6 +55,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from occtrack.experiments.table1 import as_json, format_table
+    from occtrack.scenarios.foursquare import FourSquare, table
+
     try:
         example = FourSquare(args.p_correct, args.p_wrong, args.p_top)
     except ValueError as err:

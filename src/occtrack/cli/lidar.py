@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from occtrack.cli.arguments import positive_int, seed_int
 from occtrack.errors import OcctrackError
-from occtrack.lidar import BeamModel, likelihood_ratio, regime, simulate_beams
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from occtrack.lidar import BeamModel
 
 NAME = "lidar"
 HELP = "the occlusion-tolerant lidar beam likelihood that measurement-wise occlusion derives"
@@ -45,6 +48,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def empirical_ratio(model: BeamModel, x: float, edges: np.ndarray, n: int,
                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Histogram ratio of beams with and without the object, and its standard error."""
+    import numpy as np
+
+    from occtrack.lidar import simulate_beams
+
     with_obj = np.histogram(simulate_beams(x, model, n, rng), edges)[0]
     without = np.histogram(simulate_beams(None, model, n, rng), edges)[0]
     ratio = with_obj / np.maximum(without, 1)
@@ -53,6 +60,10 @@ def empirical_ratio(model: BeamModel, x: float, edges: np.ndarray, n: int,
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from occtrack.lidar import BeamModel, likelihood_ratio, regime
+
     try:
         model = BeamModel(args.p_d, args.sigma, args.clutter_rate, args.max_range)
     except ValueError as err:

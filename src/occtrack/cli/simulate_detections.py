@@ -3,19 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import tomllib
 from pathlib import Path
 
 from occtrack.cli.arguments import seed_int
 from occtrack.errors import OcctrackError
-from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo, write_mot
-from occtrack.scenarios.detector import (
-    DetectorConfig,
-    detection_recall_precision,
-    has_mot17_columns,
-    simulate_detections,
-)
 
 NAME = "simulate-detections"
 HELP = "simulate Faster-RCNN-like detections (seeded) from a ground-truth file"
@@ -28,7 +22,8 @@ proportion to the box size and are clipped to the image; a few Poisson false pos
 added; greedy NMS (IoU 0.5) and a score threshold of 0.5 keep the final detections. Output
 rows: frame,-1,left,top,width,height,score,-1,-1,-1.
 
-The same --seed gives a byte-identical file. The image size comes from the sequence's
+The same --seed gives a byte-identical file, written whole or not at all (a temporary file
+renamed into place); -o - writes it to standard output. The image size comes from the sequence's
 seqinfo.ini when GT_FILE sits at SEQ/gt/gt.txt, else from --image-size. When GT_FILE has class
 and consider-flag columns, the closing line gives recall and precision against the mot17
 pedestrians (TrackEval's preprocessing, IoU >= 0.5). Defaults give recall about 0.60 and
@@ -52,7 +47,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("gt_file", metavar="GT_FILE", type=Path,
                         help="MOTChallenge ground truth (frame,id,l,t,w,h,flag,class,visibility)")
     parser.add_argument("-o", "--output", metavar="DET_FILE", type=Path, required=True,
-                        help="detection file to write")
+                        help="detection file to write ('-': standard output)")
     parser.add_argument("--seed", type=seed_int, default=0, metavar="S",
                         help="random seed (default 0); same seed, same file")
     parser.add_argument("--image-size", type=_image_size, metavar="WxH",
@@ -65,7 +60,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "there is no progress bar)")
 
 
-def load_config(path: Path) -> DetectorConfig:
+def load_config(path: Path):
+    """The DetectorConfig in a TOML file."""
+    from occtrack.scenarios.detector import DetectorConfig
+
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
@@ -80,12 +78,21 @@ def load_config(path: Path) -> DetectorConfig:
 
 
 def run(args: argparse.Namespace) -> int:
+    from occtrack.io.atomic import check_output
+    from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo, write_mot
+    from occtrack.scenarios.detector import (
+        DetectorConfig,
+        detection_recall_precision,
+        has_mot17_columns,
+        simulate_detections,
+    )
+
     start = time.perf_counter()
-    if args.output.exists() and not args.force:
-        raise OcctrackError("exists already; pass --force to overwrite it", str(args.output))
+    seq = find_seqinfo(args.gt_file)
+    check_output(args.output, args.force,
+                 (args.gt_file, args.config, seq and seq / "seqinfo.ini"))
     config = load_config(args.config) if args.config else DetectorConfig()
     gt = read_mot(args.gt_file, "gt")
-    seq = find_seqinfo(args.gt_file)
     num_frames = None
     if args.image_size:
         size = args.image_size
@@ -107,5 +114,6 @@ def run(args: argparse.Namespace) -> int:
     if has_mot17_columns(gt):
         recall, precision = detection_recall_precision(gt, det)
         line += f", recall {recall:.3f}, precision {precision:.3f} (mot17 pedestrians)"
-    print(f"{line}, {time.perf_counter() - start:.2f} s")
+    print(f"{line}, {time.perf_counter() - start:.2f} s",
+          file=sys.stderr if str(args.output) == "-" else sys.stdout)
     return 0

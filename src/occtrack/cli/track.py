@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
+import sys
 import time
-from pathlib import Path
 
-from occtrack.cli.arguments import positive_int
+from occtrack.cli.arguments import positive_int, whole_number
 from occtrack.errors import OcctrackError
-from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo, write_mot
-from occtrack.progress import summary
-from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig
-from occtrack.tracker.config import load_toml
+
+OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
+"""`occtrack.tracker.OCCLUSION_NAMES`, repeated so that `--help` loads no tracker (a test keeps
+the two equal)."""
 
 NAME = "track"
 HELP = "track the boxes of a MOTChallenge detection file (PMB tracker with occlusion)"
@@ -31,6 +32,18 @@ MOTChallenge sequence folder (SEQ/det/det.txt), else from the --config file; so 
 rate (default 30). Every --frame-step-th frame is tracked (default 2, as in the paper); the
 frames between are reported with the tracks carried along their velocities.
 
+Rows are checked, not altered in silence: a box of zero or negative size, a box wholly outside
+the image and a score outside [0, 1] stop the run with the file and line. A detector whose
+scores are not probabilities (MOT17's DPM, for one) takes --score-range LO,HI, which maps LO..HI
+linearly onto 0..1; --lenient skips such boxes and clips such scores, with one warning giving
+the counts and the first line. More than --max-gap-frames empty frames in a row (default: a
+day at the frame rate) is an error too, so a stray frame number cannot make the tracker step
+through billions of empty frames.
+
+The result file is written whole or not at all: to a temporary file beside it, renamed into
+place when complete, so an interrupted run leaves the old file (or none). -o - writes the
+result to standard output (the summary then goes to standard error).
+
 --config takes a TOML file of TrackerConfig settings (see occtrack.tracker.config), e.g.
   occlusion = "object-wise"
   edge_std = 10.0
@@ -46,10 +59,23 @@ def image_size(text: str) -> tuple[float, float]:
     return float(match[1]), float(match[2])
 
 
+def score_range(text: str) -> tuple[float, float]:
+    """argparse type: LO,HI with LO < HI, the raw scores that map to 0 and 1."""
+    try:
+        low, high = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a score range; write LO,HI, e.g. "
+                                         f"-3,60") from None
+    if not (math.isfinite(low) and math.isfinite(high) and low < high):
+        raise argparse.ArgumentTypeError(f"{text!r}: LO and HI must be numbers with LO < HI")
+    return low, high
+
+
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("detections", metavar="DET_FILE", help="MOTChallenge detection file")
     parser.add_argument("-o", "--output", metavar="RESULT_FILE", required=True,
-                        help="where to write the MOTChallenge result file")
+                        help="where to write the MOTChallenge result file ('-': standard "
+                             "output)")
     parser.add_argument("--occlusion", choices=OCCLUSION_NAMES, default=None,
                         help="occlusion model (default: measurement-wise, or the config "
                              "file's)")
@@ -58,18 +84,34 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="track every N-th frame (default 2, or the config file's)")
     parser.add_argument("--image-size", type=image_size, metavar="WxH", default=None,
                         help="image size in pixels (default: from seqinfo.ini)")
+    parser.add_argument("--score-range", type=score_range, metavar="LO,HI",
+                        help="map the detector's raw scores LO..HI linearly onto 0..1")
+    parser.add_argument("--lenient", action="store_true",
+                        help="skip boxes of zero size or wholly outside the image and clip "
+                             "scores to [0, 1], with one warning, instead of stopping")
+    parser.add_argument("--max-gap-frames", type=whole_number(0), metavar="N",
+                        help="most empty frames allowed in a row (default: a day at the "
+                             "frame rate)")
     parser.add_argument("--force", action="store_true", help="overwrite RESULT_FILE")
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
 
 
-def build_config(args: argparse.Namespace) -> tuple[TrackerConfig, int | None]:
-    """The tracker settings and the sequence length (None if unknown) from the flags, the
-    sequence's seqinfo.ini and the config file."""
+def build_config(args: argparse.Namespace):
+    """The tracker settings (a TrackerConfig) and the sequence length (None if unknown) from
+    the flags, the sequence's seqinfo.ini and the config file."""
+    from occtrack.io.mot import find_seqinfo, read_seqinfo
+    from occtrack.tracker import TrackerConfig
+    from occtrack.tracker.config import load_toml
+
     values: dict = {}
     source = "command line"
     if args.config:
         source = args.config
-        values = load_toml(args.config)
+        try:
+            values = load_toml(args.config)
+        except UnicodeDecodeError as err:
+            raise OcctrackError(f"not valid TOML: byte {err.start} is not UTF-8",
+                                args.config) from None
     length = None
     seq = find_seqinfo(args.detections)
     if seq is not None:
@@ -92,18 +134,30 @@ def build_config(args: argparse.Namespace) -> tuple[TrackerConfig, int | None]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from occtrack.io.atomic import check_output
+    from occtrack.io.mot import find_seqinfo, read_detections, write_mot
+    from occtrack.progress import summary
+    from occtrack.tracker import Tracker
+
+    seq = find_seqinfo(args.detections)
+    check_output(args.output, args.force,
+                 (args.detections, args.config, seq and seq / "seqinfo.ini"))
     config, length = build_config(args)
-    out = Path(args.output)
-    if out.exists() and not args.force:
-        raise OcctrackError("exists already; pass --force to overwrite it", str(out))
-    if not out.parent.is_dir():
-        raise OcctrackError("folder does not exist", str(out.parent))
-    detections = read_mot(args.detections, "det")
+    gap = args.max_gap_frames
+    if gap is None:
+        gap = math.ceil(24 * 3600 * config.fps)
+    detections, warning = read_detections(
+        args.detections, config.image_size, score_range=args.score_range,
+        lenient=args.lenient, max_gap_frames=gap, num_frames=length)
+    if warning:
+        print(f"occtrack track: warning: {warning}", file=sys.stderr)
     frames = max(length or 0, detections.num_frames)
     start = time.perf_counter()
     result = Tracker(config).run(detections, frames, quiet=args.quiet,
                                  desc=f"tracking ({config.occlusion})")
-    write_mot(out, result.frame, result.id, result.box, result.existence, overwrite=args.force)
+    write_mot(args.output, result.frame, result.id, result.box, result.existence,
+              overwrite=args.force)
     if not args.quiet:
-        print(summary(result.frames, result.num_tracks, time.perf_counter() - start))
+        print(summary(result.frames, result.num_tracks, time.perf_counter() - start),
+              file=sys.stderr if args.output == "-" else sys.stdout)
     return 0

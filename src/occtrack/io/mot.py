@@ -2,13 +2,18 @@
 
 Rows are `frame, id, left, top, width, height, score_or_flag, class, visibility[, ...]`.
 Files are read the way TrackEval reads them (comma or whitespace separated, CRLF accepted,
-float ids and frames truncated to integers, extra columns ignored), but every row is checked and
-a bad one stops the read with the file, line and problem: nothing is dropped silently.
+extra columns ignored), but every row is checked and a bad one stops the read with the file,
+line and problem: nothing is dropped or altered silently. Frames and ids (and the class of
+ground truth and results) are whole numbers, written "3" or "3.0" as TrackEval accepts; a
+fractional one such as 2.5 is an error, not truncated. Frames run from 1 to 2**31 - 1 and ids
+fit in 32 bits, so no later arithmetic on them can overflow. The class column of a detection
+file is unused and kept only when it is a whole number (else -1).
 """
 
 from __future__ import annotations
 
 import configparser
+import dataclasses
 import math
 import os
 from dataclasses import dataclass
@@ -17,8 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from occtrack.errors import OcctrackError
+from occtrack.io.atomic import atomic_write
 
 KINDS = ("det", "gt", "result")
+MAX_FRAME = 2**31 - 1
+MIN_ID, MAX_ID = -(2**31), 2**31 - 1
 
 
 @dataclass(frozen=True)
@@ -32,6 +40,7 @@ class MotTable:
     cls: np.ndarray  # (N,) int: gt class, -1 where absent
     visibility: np.ndarray  # (N,) float: gt visibility, -1 where absent
     path: str = ""
+    line: np.ndarray | None = None  # (N,) int: 1-based line in `path`; None if not from a file
 
     def __len__(self) -> int:
         return len(self.frame)
@@ -42,7 +51,8 @@ class MotTable:
 
     def select(self, mask: np.ndarray) -> MotTable:
         return MotTable(self.frame[mask], self.id[mask], self.box[mask], self.score[mask],
-                        self.cls[mask], self.visibility[mask], self.path)
+                        self.cls[mask], self.visibility[mask], self.path,
+                        None if self.line is None else self.line[mask])
 
     def frame_slices(self, num_frames: int | None = None) -> list[np.ndarray]:
         """Row indices of each frame 1..num_frames (index f-1), empty where a frame has none."""
@@ -61,24 +71,41 @@ def _split(line: str) -> list[str]:
     return parts
 
 
-def read_mot(path: str | os.PathLike, kind: str = "det") -> MotTable:
-    """Read a MOTChallenge file: "det", "gt" or "result". Rows may come in any frame order
-    (the MOT17 detection files do not keep it); every row is kept, and `frame_slices`
-    groups them by frame with a stable sort."""
-    if kind not in KINDS:
-        raise ValueError(f"kind must be one of {KINDS}")
-    p = str(path)
+def _whole(text: str, value: float, what: str, low: int, high: int, path: str,
+           line: int) -> int:
+    """An integer column: "3" or "3.0" (TrackEval reads both), nothing fractional, in range."""
     try:
-        with open(p, encoding="utf-8", newline="") as fh:
+        number = int(text)
+    except ValueError:
+        if not value.is_integer():
+            raise OcctrackError(f"{what} {text} is not a whole number", path, line) from None
+        number = int(value)
+    if number < low and what == "frame":
+        raise OcctrackError(f"frame {text} is below 1 (frames are 1-based)", path, line)
+    if not low <= number <= high:
+        raise OcctrackError(f"{what} {text} is out of range: {what}s run from {low} to {high}",
+                            path, line)
+    return number
+
+
+def _read(path: str, kind: str) -> MotTable:
+    """Every row of a MOTChallenge file, checked cell by cell but not for meaning."""
+    try:
+        with open(path, encoding="utf-8", newline="") as fh:
             lines = fh.read().splitlines()
     except FileNotFoundError:
-        raise OcctrackError("no such file", p) from None
+        raise OcctrackError("no such file", path) from None
     except IsADirectoryError:
-        raise OcctrackError("is a directory, expected a MOTChallenge text file", p) from None
-    except UnicodeDecodeError:
-        raise OcctrackError("not a text file", p) from None
+        raise OcctrackError("is a directory, expected a MOTChallenge text file", path) from None
+    except UnicodeDecodeError as err:
+        raise OcctrackError(f"not a text file (byte {err.start} is not UTF-8)", path) from None
 
-    rows: list[tuple] = []
+    strict_class = kind != "det"
+    frames: list[int] = []
+    ids: list[int] = []
+    classes: list[int] = []
+    numbers: list[int] = []
+    reals: list[tuple] = []
     for number, raw in enumerate(lines, start=1):
         line = raw.strip().lstrip("\ufeff")
         if not line:
@@ -86,58 +113,168 @@ def read_mot(path: str | os.PathLike, kind: str = "det") -> MotTable:
         parts = _split(line)
         if len(parts) < 6:
             raise OcctrackError(f"expected at least 6 columns (frame, id, left, top, width, "
-                                f"height), found {len(parts)}: {line[:60]!r}", p, number)
+                                f"height), found {len(parts)}: {line[:60]!r}", path, number)
         values = []
         for col, text in enumerate(parts[:9]):
             try:
                 v = float(text)
             except ValueError:
                 raise OcctrackError(f"column {col + 1} is not a number: {text!r}",
-                                    p, number) from None
+                                    path, number) from None
             if math.isnan(v) or math.isinf(v):
-                raise OcctrackError(f"column {col + 1} is {text}", p, number)
+                raise OcctrackError(f"column {col + 1} is {text}", path, number)
             values.append(v)
-        frame = int(values[0])
-        if frame < 1:
-            raise OcctrackError(f"frame {values[0]:g} is below 1 (frames are 1-based)", p, number)
-        if values[4] < 0 or values[5] < 0:
-            raise OcctrackError(f"negative box size {values[4]:g} x {values[5]:g}", p, number)
-        score = values[6] if len(values) > 6 else 1.0
-        cls = int(values[7]) if len(values) > 7 else -1
-        vis = values[8] if len(values) > 8 else -1.0
-        rows.append((frame, int(values[1]), values[2], values[3], values[4], values[5],
-                     score, cls, vis))
+        frames.append(_whole(parts[0], values[0], "frame", 1, MAX_FRAME, path, number))
+        ids.append(_whole(parts[1], values[1], "id", MIN_ID, MAX_ID, path, number))
+        cls = -1
+        if len(values) > 7:
+            if strict_class:
+                cls = _whole(parts[7], values[7], "class", MIN_ID, MAX_ID, path, number)
+            elif values[7].is_integer() and MIN_ID <= values[7] <= MAX_ID:
+                cls = int(values[7])
+        classes.append(cls)
+        numbers.append(number)
+        reals.append((*values[2:6], values[6] if len(values) > 6 else 1.0,
+                      values[8] if len(values) > 8 else -1.0))
 
+    arr = np.array(reals, dtype=float).reshape(-1, 6)
+    return MotTable(frame=np.array(frames, dtype=np.int64), id=np.array(ids, dtype=np.int64),
+                    box=arr[:, :4].copy(), score=arr[:, 4].copy(),
+                    cls=np.array(classes, dtype=np.int64), visibility=arr[:, 5].copy(),
+                    path=path, line=np.array(numbers, dtype=np.int64))
+
+
+def read_mot(path: str | os.PathLike, kind: str = "det",
+             max_gap_frames: int | None = None) -> MotTable:
+    """Read a MOTChallenge file: "det", "gt" or "result". Rows may come in any frame order
+    (the MOT17 detection files do not keep it); every row is kept, and `frame_slices`
+    groups them by frame with a stable sort. `max_gap_frames` (None: no limit) bounds the run
+    of empty frames before a row, so a stray huge frame number is an error, not a long loop."""
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {KINDS}")
+    table = _read(str(path), kind)
+    negative = np.flatnonzero((table.box[:, 2] < 0) | (table.box[:, 3] < 0))
+    if len(negative):
+        i = negative[0]
+        raise OcctrackError(f"negative box size {table.box[i, 2]:g} x {table.box[i, 3]:g}",
+                            table.path, int(table.line[i]))
     if kind == "gt":
-        _check_unique_ids(rows, p)
-    arr = np.array(rows, dtype=float).reshape(-1, 9)
-    return MotTable(frame=arr[:, 0].astype(np.int64), id=arr[:, 1].astype(np.int64),
-                    box=arr[:, 2:6].copy(), score=arr[:, 6].copy(),
-                    cls=arr[:, 7].astype(np.int64), visibility=arr[:, 8].copy(), path=p)
+        twice = first_duplicate(table.frame, table.id)
+        if twice is not None:
+            a, b = table.line[list(twice)]
+            raise OcctrackError(f"id {table.id[twice[0]]} appears twice in frame "
+                                f"{table.frame[twice[0]]} (lines {a} and {b})", table.path, b)
+    if max_gap_frames is not None:
+        check_gaps(table, max_gap_frames)
+    return table
 
 
-def _check_unique_ids(rows: list[tuple], path: str) -> None:
-    seen: dict[tuple[int, int], int] = {}
-    for index, row in enumerate(rows):
-        key = (row[0], row[1])
-        if key in seen:
-            raise OcctrackError(f"id {row[1]} appears twice in frame {row[0]} "
-                                f"(rows {seen[key] + 1} and {index + 1})", path)
-        seen[key] = index
+def read_detections(path: str | os.PathLike, image_size: tuple[float, float], *,
+                    score_range: tuple[float, float] | None = None, lenient: bool = False,
+                    max_gap_frames: int | None = None,
+                    num_frames: int | None = None) -> tuple[MotTable, str | None]:
+    """A detection file to track, and a warning (None if there is nothing to say).
+
+    A row with a zero or negative size, a box wholly outside the image, or a score outside
+    [0, 1] (after `score_range` (lo, hi) maps lo..hi linearly onto 0..1) is an error naming
+    its line, unless `lenient`: then such boxes are skipped and such scores clipped, and the
+    warning gives the counts and the first line of each."""
+    table = _read(str(path), "det")
+    width, height = image_size
+    left, top, w, h = table.box.T
+    bad_size = (w <= 0) | (h <= 0)
+    outside = ~bad_size & ((left + w <= 0) | (top + h <= 0) | (left >= width) | (top >= height))
+    score = table.score
+    if score_range is not None:
+        low, high = score_range
+        score = (score - low) / (high - low)
+    off = (score < 0) | (score > 1)
+    size = f"{width:g}x{height:g}"
+    if not lenient and (bad_size | outside | off).any():
+        i = int(np.argmax(bad_size | outside | off))
+        l_, t_, w_, h_ = table.box[i]
+        if bad_size[i]:
+            problem = (f"box size {w_:g} x {h_:g}: width and height must be positive; pass "
+                       f"--lenient to skip such rows")
+        elif outside[i]:
+            problem = (f"box at ({l_:g}, {t_:g}) of size {w_:g} x {h_:g} lies wholly outside "
+                       f"the {size} image; check the image size, or pass --lenient to skip "
+                       f"such rows")
+        elif score_range is None:
+            problem = (f"score {table.score[i]:g} is outside [0, 1] (this file's scores run "
+                       f"from {table.score.min():g} to {table.score.max():g}); pass "
+                       f"--score-range LO,HI to map the detector's scores onto [0, 1], or "
+                       f"--lenient to clip them")
+        else:
+            problem = (f"score {table.score[i]:g} is outside --score-range {low:g},{high:g} "
+                       f"(this file's scores run from {table.score.min():g} to "
+                       f"{table.score.max():g}); widen the range, or pass --lenient to clip")
+        raise OcctrackError(problem, table.path, int(table.line[i]))
+
+    notes = []
+    skip = bad_size | outside
+    if skip.any():
+        notes.append(f"skipped {int(skip.sum())} rows with a zero or negative size or wholly "
+                     f"outside the {size} image (first at line {table.line[skip][0]})")
+    clipped = off & ~skip
+    if clipped.any():
+        notes.append(f"clipped {int(clipped.sum())} scores to [0, 1] (first at line "
+                     f"{table.line[clipped][0]})")
+    table = dataclasses.replace(table, score=np.clip(score, 0.0, 1.0)).select(~skip)
+    if max_gap_frames is not None:
+        check_gaps(table, max_gap_frames, num_frames)
+    return table, (f"{table.path}: " + "; ".join(notes)) if notes else None
+
+
+def check_gaps(table: MotTable, max_gap_frames: int, num_frames: int | None = None) -> None:
+    """Refuse more than `max_gap_frames` empty frames in a row: before the first row, between
+    rows, or after the last up to `num_frames`. A tracker steps through every frame, so one
+    stray frame number of 10^9 would otherwise mean a billion steps."""
+    frames = np.unique(table.frame)
+    if not len(frames):
+        return
+    limit = (f"more than the {max_gap_frames} allowed; check the frame numbers, or raise "
+             f"--max-gap-frames if the gap is real")
+
+    def first_line(frame: int) -> int | None:
+        return None if table.line is None else int(table.line[table.frame == frame].min())
+
+    if frames[0] - 1 > max_gap_frames:
+        raise OcctrackError(f"the first row is in frame {frames[0]}, after {frames[0] - 1} "
+                            f"empty frames: {limit}", table.path or None, first_line(frames[0]))
+    gaps = np.flatnonzero(np.diff(frames) - 1 > max_gap_frames)
+    if len(gaps):
+        a, b = frames[gaps[0]], frames[gaps[0] + 1]
+        raise OcctrackError(f"frame {b} follows frame {a} after {b - a - 1} empty frames: "
+                            f"{limit}", table.path or None, first_line(b))
+    if num_frames is not None and num_frames - frames[-1] > max_gap_frames:
+        raise OcctrackError(f"the last row is in frame {frames[-1]} but the sequence has "
+                            f"{num_frames} frames (seqinfo.ini): {num_frames - frames[-1]} empty "
+                            f"frames at the end, {limit}", table.path or None)
+
+
+def first_duplicate(frame: np.ndarray, ids: np.ndarray) -> tuple[int, int] | None:
+    """Indices of two rows with the same frame and id (the earliest such pair in frame and id
+    order), or None. Sorts the pairs instead of combining them into one number, so no id or
+    frame, however large, can overflow into another's key."""
+    if len(frame) < 2:
+        return None
+    order = np.lexsort((np.arange(len(frame)), ids, frame))
+    f, i = frame[order], ids[order]
+    same = np.flatnonzero((f[1:] == f[:-1]) & (i[1:] == i[:-1]))
+    if not len(same):
+        return None
+    return int(order[same[0]]), int(order[same[0] + 1])
 
 
 def write_mot(path: str | os.PathLike, frame: np.ndarray, ids: np.ndarray, box: np.ndarray,
               score: np.ndarray | None = None, overwrite: bool = False) -> None:
     """Write a result file `frame,id,left,top,width,height,score,-1,-1,-1`, sorted by frame
-    then id. Refuses to replace an existing file unless `overwrite`."""
-    p = Path(path)
-    if p.exists() and not overwrite:
-        raise OcctrackError("exists already; pass --force to overwrite it", str(p))
-    if p.parent and not p.parent.exists():
-        raise OcctrackError("folder does not exist", str(p.parent))
+    then id, whole or not at all (`occtrack.io.atomic`); "-" writes to standard output.
+    Refuses to replace an existing file unless `overwrite`."""
     score = np.ones(len(frame)) if score is None else score
     order = np.lexsort((ids, frame))
-    with open(p, "w", encoding="utf-8") as fh:
+    with atomic_write(path, overwrite) as fh:
         for i in order:
             l, t, w, h = box[i]
             fh.write(f"{int(frame[i])},{int(ids[i])},{l:.2f},{t:.2f},{w:.2f},{h:.2f},"
@@ -153,13 +290,18 @@ def read_seqinfo(folder: str | os.PathLike) -> dict[str, int | str]:
         with open(ini, encoding="utf-8") as fh:
             parser.read_file(fh)
         s = parser["Sequence"]
-        return {"name": s.get("name", Path(folder).name), "width": int(s["imWidth"]),
+        info = {"name": s.get("name", Path(folder).name), "width": int(s["imWidth"]),
                 "height": int(s["imHeight"]), "length": int(s["seqLength"]),
                 "fps": int(float(s.get("frameRate", "30")))}
     except FileNotFoundError:
         raise OcctrackError("no seqinfo.ini here", str(ini)) from None
-    except (KeyError, ValueError, configparser.Error) as err:
+    except (KeyError, ValueError, OverflowError, configparser.Error) as err:
         raise OcctrackError(f"malformed seqinfo.ini: {err}", str(ini)) from None
+    for key in ("width", "height", "length", "fps"):
+        if not 1 <= info[key] <= MAX_FRAME:
+            raise OcctrackError(f"malformed seqinfo.ini: {key} {info[key]} is not a positive "
+                                f"whole number below 2**31", str(ini))
+    return info
 
 
 def find_seqinfo(mot_file: str | os.PathLike) -> Path | None:

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from occtrack.errors import OcctrackError
+from occtrack.io.atomic import check_output
 from occtrack.scenarios.foursquare import BL, BR, OUTCOMES, TL, TR, FourSquare, table
+from occtrack.viz.output import save
 
 # (column, row) of each cell, row 1 on top
 XY = {TL: (0, 1), TR: (1, 1), BL: (0, 0), BR: (1, 0)}
@@ -24,9 +25,7 @@ def _grid(ax, title: str) -> None:
 
 
 def draw_foursquare(example: FourSquare, path: Path, overwrite: bool = False) -> None:
-    path = Path(path)
-    if path.exists() and not overwrite:
-        raise OcctrackError("exists already; pass --force to overwrite it", str(path))
+    check_output(path, overwrite)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -76,5 +75,4 @@ def draw_foursquare(example: FourSquare, path: Path, overwrite: bool = False) ->
     fig.suptitle("Four-square example (paper section II): priors, measurement model, "
                  "and outcomes (red boxes: measurements)", fontsize=11)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path, overwrite, dpi=110)

@@ -9,16 +9,17 @@ from pathlib import Path
 import numpy as np
 
 from occtrack.errors import OcctrackError
+from occtrack.io.atomic import check_output
+from occtrack.viz.output import save
 
 
 def check_new(path: str | Path, overwrite: bool) -> Path:
-    """The path of a figure about to be written: refuses to replace a file unless asked."""
-    path = Path(path)
-    if path.exists() and not overwrite:
-        raise OcctrackError("exists already; pass --force to overwrite it", str(path))
-    if not path.parent.is_dir():
-        raise OcctrackError("folder does not exist", str(path.parent))
-    return path
+    """The path of a figure about to be written, checked before the work that draws it:
+    refuses to replace a file unless asked."""
+    checked = check_output(path, overwrite)
+    if checked is None:
+        raise OcctrackError("a picture cannot go to standard output; give a file name")
+    return checked
 
 
 def _panel(ax, image_size, window, truth, detections, track_ids, track_boxes, title) -> None:
@@ -46,10 +47,11 @@ def _panel(ax, image_size, window, truth, detections, track_ids, track_boxes, ti
 
 def draw_panels(path: str | Path, image_size: tuple[float, float], panels: list[dict],
                 window: tuple[float, float, float, float] | None = None,
-                caption: str = "") -> None:
+                caption: str = "", overwrite: bool = True) -> None:
     """Save panels side by side as a PNG; each panel is a dict with truth, detections,
     track_ids, track_boxes ((n, 4) left, top, width, height) and title. `window` (left, top,
-    right, bottom) crops every panel to one part of the image."""
+    right, bottom) crops every panel to one part of the image. Callers check the path with
+    `check_new` before the work, hence `overwrite` defaults to True here."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -66,9 +68,4 @@ def draw_panels(path: str | Path, image_size: tuple[float, float], panels: list[
     if caption:
         fig.text(0.5, 0.02, caption, ha="center", fontsize=8)
     fig.tight_layout(rect=(0, 0.05 if caption else 0, 1, 1))
-    try:
-        fig.savefig(path, dpi=110)
-    except OSError as err:
-        raise OcctrackError(f"cannot write the figure: {err.strerror}", str(path)) from None
-    finally:
-        plt.close(fig)
+    save(fig, path, overwrite, dpi=110)

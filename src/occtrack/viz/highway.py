@@ -15,6 +15,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from occtrack.errors import OcctrackError
+from occtrack.io.atomic import check_output
+from occtrack.viz import output
 
 BAR = 0.35
 BOX = 0.8
@@ -26,11 +28,7 @@ def check_path(path: Path, suffixes: tuple[str, ...], overwrite: bool) -> Path:
     path = Path(path)
     if path.suffix.lower() not in suffixes:
         raise OcctrackError(f"must end in {' or '.join(suffixes)}", str(path))
-    if path.exists() and not overwrite:
-        raise OcctrackError("exists already; pass --force to overwrite it", str(path))
-    if not path.parent.exists():
-        raise OcctrackError("its folder does not exist", str(path))
-    return path
+    return check_output(path, overwrite) or path
 
 
 def draw_frame(ax, road, cars, scan, estimates=None, model=None, title: str = "") -> None:
@@ -120,8 +118,7 @@ def save_figure(path: Path, road, frames: Sequence[tuple], model=None, titles=No
         draw_frame(axes[i, 0], road, cars, scan, est, model, titles[i] if titles else "")
     _legend(fig)
     fig.tight_layout(rect=(0, 0.05, 1, 1))
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    output.save(fig, path, overwrite, dpi=130)
     return path
 
 
@@ -147,6 +144,5 @@ def save_animation(path: Path, road, frames: Sequence[tuple], model=None, title:
     _legend(fig)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
     anim = FuncAnimation(fig, update, frames=len(frames), blit=False)
-    anim.save(path, writer=PillowWriter(fps=fps), dpi=80)
-    plt.close(fig)
+    output.save_animation(anim, fig, path, overwrite, writer=PillowWriter(fps=fps), dpi=80)
     return path

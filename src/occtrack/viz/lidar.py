@@ -8,6 +8,7 @@ import numpy as np
 
 from occtrack.lidar import BeamModel, likelihood_ratio
 from occtrack.viz.frame import check_new
+from occtrack.viz.output import save
 
 
 def draw_beam_likelihood(path: str | Path, model: BeamModel, x: float,
@@ -38,5 +39,4 @@ def draw_beam_likelihood(path: str | Path, model: BeamModel, x: float,
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save(fig, path, overwrite, dpi=100)

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from occtrack.viz.frame import check_new
+from occtrack.viz.output import save
 
 
 def plot_gospa_per_frame(path: str | Path, series: dict[str, np.ndarray], title: str,
@@ -34,5 +35,4 @@ def plot_gospa_per_frame(path: str | Path, series: dict[str, np.ndarray], title:
     ax.legend(fontsize=9)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save(fig, path, overwrite, dpi=100)
