@@ -128,17 +128,17 @@ def test_peers_report_the_detection_boxes(tmp_path):
 
 
 def test_bad_input_is_named(tmp_path, capsys):
-    assert main(["benchmark", str(tmp_path)]) == 2
+    assert main(["benchmark", str(tmp_path)]) == 1
     err = capsys.readouterr().err
     assert str(tmp_path) in err and "det/det.txt" in err
-    assert main(["benchmark", str(tmp_path / "absent")]) == 2
+    assert main(["benchmark", str(tmp_path / "absent")]) == 1
     assert "no such folder" in capsys.readouterr().err
     seq = tmp_path / "SEQ"
     make_sequence(seq, "SEQ")
-    assert main(["benchmark", str(seq), "--trackers", "none,deepsort"]) == 2
+    assert main(["benchmark", str(seq), "--trackers", "none,deepsort"]) == 1
     assert "unknown tracker 'deepsort'" in capsys.readouterr().err
     (seq / "seqinfo.ini").unlink()
-    assert main(["benchmark", str(seq), "--trackers", "none"]) == 2
+    assert main(["benchmark", str(seq), "--trackers", "none"]) == 1
     assert "seqinfo.ini" in capsys.readouterr().err
     assert find_sequences(seq) == [seq]
 
@@ -148,7 +148,7 @@ def test_json_file_is_kept_unless_forced(tmp_path, capsys):
     make_sequence(seq, "SEQ")
     out = tmp_path / "bench.json"
     out.write_text("keep me\n")
-    assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(out)]) == 2
+    assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(out)]) == 1
     assert "exists already" in capsys.readouterr().err and out.read_text() == "keep me\n"
     assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(out), "--force",
                  "--quiet"]) == 0
@@ -160,7 +160,7 @@ def test_without_the_peers_extra(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(peers, "available", lambda: False)
     seq = tmp_path / "SEQ"
     make_sequence(seq, "SEQ")
-    assert main(["benchmark", str(seq), "--trackers", "none,bytetrack"]) == 2
+    assert main(["benchmark", str(seq), "--trackers", "none,bytetrack"]) == 1
     assert 'pip install "occtrack[peers]"' in capsys.readouterr().err
     assert main(["benchmark", str(seq), "--json", "-"]) == 0
     captured = capsys.readouterr()

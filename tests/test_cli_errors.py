@@ -119,11 +119,11 @@ def test_os_errors_are_one_line_naming_the_file(det, tmp_path, capsys, monkeypat
     track_module = importlib.import_module("occtrack.cli.track")
 
     def denied(args):
-        raise PermissionError(errno.EACCES, "Permission denied", "/data/det.txt")
+        raise PermissionError(errno.EACCES, "Permission denied", "locked/det.txt")
 
     monkeypatch.setattr(track_module, "run", denied)
     assert track(det, "-o", "r.txt") == 1
-    err = one_error_line(capsys, "occtrack track: error: /data/det.txt: permission denied; ")
+    err = one_error_line(capsys, "occtrack track: error: locked/det.txt: permission denied; ")
     assert "check the permissions" in err
 
     def full(args):

@@ -65,7 +65,17 @@ def load(f, mass, label, means=None, det=0.9, occ=0.5, cov_diag=(25.0, 100.0, 4.
     f.cov[:n] = np.diag(cov_diag)
     f.det[:n], f.occ[:n] = det, occ
     f.slot_used[:] = False
-    f.slot_used[np.unique(label[label >= 0])] = True
+    used = np.unique(label[label >= 0])
+    f.slot_used[used] = True
+    f.slot_hits[used] = f.config.confirm_hits  # confirmed objects, to which occlusion applies
+    f.slot_age[used] = f.config.confirm_window
+    f.coast[:n] = 0.0
+
+
+def clutter_rate(kappa: float) -> float:
+    """The `clutter_rate` that gives a detection of `person()`'s 40 x 120 px box in the
+    default 1920 x 1080 image the clutter density kappa (score 1): kappa W H w h."""
+    return kappa * 1920.0 * 1080.0 * 40.0 * 120.0
 
 
 def features_after(d, o, likelihood):
@@ -186,7 +196,7 @@ def test_a_bernoulli_born_this_step_keeps_at_most_its_share_of_components():
     """Six Poisson components near one detection: the new Bernoulli of that detection is the
     six hit children; it keeps its two heaviest, rescaled to its existence
     L_0 / (kappa p_F + L_0). (Trimming used to skip label -1, so a newborn kept all six.)"""
-    f = make(max_components_per_object=2, clutter_density=1e-8, capacity=32)
+    f = make(max_components_per_object=2, clutter_rate=clutter_rate(1e-8), capacity=32)
     means = np.stack([person(900.0 + 2.0 * k) for k in range(6)])
     w = np.array([0.3, 0.5, 0.2, 0.6, 0.4, 0.1])
     occ = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.6])  # kept by a hit with v = 1: names the parent
@@ -211,9 +221,10 @@ def test_a_bernoulli_born_this_step_keeps_at_most_its_share_of_components():
 
 
 def test_merge_is_moment_matching():
+    # cells are in box heights, the height rounded to a power of two: 128 px for these boxes
     """a and b (object 0) share a 10 px / 10 px/s cell, c (object 0) does not, d (object 1)
     sits on a but belongs to another object, e1 and e2 are Poisson components in one cell."""
-    f = make(merge_position=10.0, merge_velocity=10.0)
+    f = make(merge_position=10.0 / 128, merge_velocity=10.0 / 128)
     rng = np.random.default_rng(2)
     means = np.array([
         [[101.0, 1.0, 31.0], [402.0, -3.0, 62.0]],  # a
@@ -229,7 +240,8 @@ def test_merge_is_moment_matching():
     det = np.array([0.9, 0.5, 0.7, 0.6, 0.2, 0.8])
     occ = np.array([0.2, 0.7, 0.4, 0.5, 0.9, 0.1])
     label = np.array([0, 0, 0, 1, -1, -1])
-    out = f._merge(mass, means, covs, det, occ, label)
+    coast = np.array([0.0, 0.1, 0.0, 0.2, 0.0, 0.0])
+    out = f._merge(mass, means, covs, det, occ, coast, label)
     assert len(out[0]) == 4
 
     def pooled(idx):
@@ -241,15 +253,17 @@ def test_merge_is_moment_matching():
             for axis in range(2):
                 dev = means[k, axis] - mu[axis]
                 sigma[axis] += s * (covs[k, axis] + np.outer(dev, dev))
-        return w.sum(), mu, sigma, share @ det[idx], share @ occ[idx], label[idx[0]]
+        return (w.sum(), mu, sigma, share @ det[idx], share @ occ[idx], share @ coast[idx],
+                label[idx[0]])
 
     expected = [pooled([0, 1]), pooled([2]), pooled([3]), pooled([4, 5])]
-    for w, mu, sigma, d, o, lab in expected:
+    for w, mu, sigma, d, o, t, lab in expected:
         (k,) = np.flatnonzero(np.isclose(out[0], w, rtol=1e-12, atol=0))
         assert out[1][k] == pytest.approx(mu, rel=1e-12)
         assert out[2][k] == pytest.approx(sigma, rel=1e-12)
-        assert (out[3][k], out[4][k], out[5][k]) == (pytest.approx(d, rel=1e-12),
-                                                     pytest.approx(o, rel=1e-12), lab)
+        assert (out[3][k], out[4][k], out[5][k], out[6][k]) == (
+            pytest.approx(d, rel=1e-12), pytest.approx(o, rel=1e-12),
+            pytest.approx(t, rel=1e-12), lab)
     # the spread of the means is a large part of the merged covariance: dropping it shows
     ab = expected[0][2]
     without_spread = (mass[0] * covs[0] + mass[1] * covs[1]) / (mass[0] + mass[1])
@@ -257,11 +271,11 @@ def test_merge_is_moment_matching():
 
 
 def test_merge_leaves_distinct_cells_alone():
-    f = make(merge_position=10.0, merge_velocity=10.0)
+    f = make(merge_position=10.0 / 128, merge_velocity=10.0 / 128)
     means = np.stack([person(100.0), person(115.0), person(100.0, vx=15.0)])
     covs = np.broadcast_to(np.eye(3), (3, 2, 3, 3)).copy()
     out = f._merge(np.array([0.1, 0.2, 0.3]), means, covs, np.full(3, 0.5), np.full(3, 0.5),
-                   np.zeros(3, dtype=np.int64))
+                   np.zeros(3), np.zeros(3, dtype=np.int64))
     assert sorted(out[0]) == [0.1, 0.2, 0.3]
 
 
@@ -363,7 +377,7 @@ def test_features_after_a_hit_equal_bayes():
     hit likelihood; the miss child has both by Bayes with the miss likelihood."""
     v, q, h = 0.6, 0.3, 0.25
     kappa = 1e-7
-    f = make(FixedTerms(v, q, h), clutter_density=kappa)
+    f = make(FixedTerms(v, q, h), clutter_rate=clutter_rate(kappa))
     load(f, [0.8], [0], det=0.7, occ=0.6)
     z = edges(person(905.0, 396.0))
     lik = np.exp(f.measurement.loglik(f.mean[:1], f.cov[:1], z,

@@ -32,7 +32,7 @@ def test_environment_variable_is_searched(tmp_path, monkeypatch):
 
 
 def test_seed_needs_simulated_detections(capsys):
-    assert main(["reproduce", "table2", "--seed", "3"]) == 2
+    assert main(["reproduce", "table2", "--seed", "3"]) == 1
     assert "--detections simulated" in capsys.readouterr().err
 
 
@@ -41,7 +41,7 @@ def test_missing_detection_file_is_named(tmp_path, capsys):
     (seq / "gt").mkdir(parents=True)
     (seq / "gt" / "gt.txt").write_text("1,1,0,0,5,5,1,1,1\n")
     (seq / "seqinfo.ini").write_text("[Sequence]\nimWidth=64\nimHeight=48\nseqLength=1\n")
-    assert main(["reproduce", "table2", "--data", str(tmp_path), "--no-norfair"]) == 2
+    assert main(["reproduce", "table2", "--data", str(tmp_path), "--no-norfair"]) == 1
     err = capsys.readouterr().err
     assert str(seq / "det" / "det.txt") in err and "no such file" in err
 
