@@ -24,7 +24,7 @@ def det(tmp_path):
 
 
 def track(det, *args):
-    return main(["track", str(det), "--image-size", "640x480", "--quiet", *args])
+    return main(["track", str(det), "--image-size", "640x480", "--fps", "30", "--quiet", *args])
 
 
 def one_error_line(capsys, start: str) -> str:
@@ -69,7 +69,7 @@ def test_output_that_is_an_input_is_refused_before_reading(det, tmp_path, capsys
 
 
 def test_dash_writes_the_result_to_stdout(det, capsys):
-    assert main(["track", str(det), "--image-size", "640x480", "-o", "-"]) == 0
+    assert main(["track", str(det), "--image-size", "640x480", "--fps", "30", "-o", "-"]) == 0
     out, err = capsys.readouterr()
     rows = out.splitlines()
     assert rows and all(row.count(",") == 9 for row in rows)
@@ -191,7 +191,8 @@ def test_every_failure_has_one_line_and_a_status(det, capsys, monkeypatch, failu
     assert track(det, "-o", "r.txt", "--config", "cfg.toml") == status
     one_error_line(capsys, message)
     with pytest.raises(type(failure)):
-        main(["--debug", "track", str(det), "--image-size", "640x480", "-o", "r.txt"])
+        main(["--debug", "track", str(det), "--image-size", "640x480", "--fps", "30",
+              "-o", "r.txt"])
 
 
 def test_occlusion_names_match_the_tracker():

@@ -61,7 +61,8 @@ def test_track_refuses_to_overwrite(sequence, tmp_path, capsys):
 def test_malformed_detection_line_is_named(tmp_path, capsys):
     det = tmp_path / "det.txt"
     det.write_text("1,-1,10,10,30,90,0.9\n1,-1,10,10,thirty,90,0.9\n")
-    code = main(["track", str(det), "--image-size", "640x480", "-o", str(tmp_path / "r.txt")])
+    code = main(["track", str(det), "--image-size", "640x480", "--fps", "25", "-o",
+                 str(tmp_path / "r.txt")])
     err = capsys.readouterr().err.strip()
     assert code == 1
     assert err == f"occtrack track: error: {det}:2: column 5 is not a number: 'thirty'"
@@ -77,6 +78,8 @@ def test_image_size_is_required_without_seqinfo(tmp_path, capsys):
         main(["track", str(det), "--image-size", "640by480", "-o", str(tmp_path / "r.txt")])
     assert exit_.value.code == 2
     assert "is not an image size" in capsys.readouterr().err
+    assert main(["track", str(det), "--image-size", "640x480", "-o", str(tmp_path / "r.txt")]) == 1
+    assert "fps unknown: pass --fps HZ" in capsys.readouterr().err
 
 
 def test_config_file_settings_and_errors(sequence, tmp_path, capsys):

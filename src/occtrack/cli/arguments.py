@@ -22,6 +22,19 @@ def whole_number(minimum: int) -> Callable[[str], int]:
     return parse
 
 
+def positive_float(text: str) -> float:
+    """An argparse type: a finite number above zero."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text} must be a finite number above 0")
+    return value
+
+
+positive_float.__name__ = "positive number"
+
 DAY_AT_30_FPS = 24 * 3600 * 30
 """Default bound on a run of empty frames: a day of video at the usual MOTChallenge rate."""
 

@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps({"detector": detector, "trackers": scores}, indent=2))
     else:
         print(f"Synthetic street, seed {args.seed}: {args.people} people in view, "
-              f"{scene.frames} frames at {scene.fps:g} fps, tracked every other frame")
+              f"{scene.frames} frames at {scene.fps:g} fps, every frame tracked")
         print(f"ground truth: {len(np.unique(scene.truth.id))} people in all; detector: "
               f"recall {detector['recall']:.3f}, precision {detector['precision']:.3f}\n")
         print(f"{'occlusion':<18}{'MOTA':>7}{'IDF1':>7}{'ID switches':>13}"

@@ -8,7 +8,7 @@ import re
 import sys
 import time
 
-from occtrack.cli.arguments import positive_int, whole_number
+from occtrack.cli.arguments import positive_float, positive_int, whole_number
 from occtrack.errors import OcctrackError
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
@@ -29,8 +29,11 @@ Detection rows are frame,id,left,top,width,height,score[,...] (the id is ignored
 
 The image size comes from --image-size, else from seqinfo.ini when the file sits in a
 MOTChallenge sequence folder (SEQ/det/det.txt), else from the --config file; so does the frame
-rate (default 30). Every --frame-step-th frame is tracked (default 2, as in the paper); the
-frames between are reported with the tracks carried along their velocities.
+rate (--fps); where neither flag, seqinfo.ini nor config file gives one, the run stops and
+says so: the tracker's noises and rates are per second and its lengths in box heights, so
+they hold for any camera once the frame rate is known. Every frame is tracked
+(--frame-step N tracks every N-th, as the paper did with 2; the frames between are reported
+with the tracks carried along their velocities).
 
 Rows are checked, not altered in silence: a box of zero or negative size, a box wholly outside
 the image and a score outside [0, 1] stop the run with the file and line. A detector whose
@@ -46,7 +49,7 @@ result to standard output (the summary then goes to standard error).
 
 --config takes a TOML file of TrackerConfig settings (see occtrack.tracker.config), e.g.
   occlusion = "object-wise"
-  edge_std = 10.0
+  edge_noise = 0.05
 Flags given on the command line win over the file."""
 
 
@@ -81,7 +84,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "file's)")
     parser.add_argument("--config", metavar="FILE", help="TOML file of tracker settings")
     parser.add_argument("--frame-step", type=positive_int, metavar="N", default=None,
-                        help="track every N-th frame (default 2, or the config file's)")
+                        help="track every N-th frame (default 1, or the config file's)")
+    parser.add_argument("--fps", type=positive_float, metavar="HZ", default=None,
+                        help="frame rate of the sequence (default: from seqinfo.ini)")
     parser.add_argument("--image-size", type=image_size, metavar="WxH", default=None,
                         help="image size in pixels (default: from seqinfo.ini)")
     parser.add_argument("--score-range", type=score_range, metavar="LO,HI",
@@ -122,10 +127,13 @@ def build_config(args: argparse.Namespace):
         values["fps"] = float(info["fps"])
     if args.image_size is not None:
         values["image_size"] = args.image_size
-    if "image_size" not in values:
-        raise OcctrackError("image size unknown: pass --image-size WxH (no seqinfo.ini beside "
-                            "the detection folder, no image_size in a --config file)",
-                            args.detections)
+    if args.fps is not None:
+        values["fps"] = args.fps
+    for key, flag in (("image_size", "--image-size WxH"), ("fps", "--fps HZ")):
+        if key not in values:
+            raise OcctrackError(f"{key.replace('_', ' ')} unknown: pass {flag} (no seqinfo.ini "
+                                f"beside the detection folder, no {key} in a --config file)",
+                                args.detections)
     if args.occlusion is not None:
         values["occlusion"] = args.occlusion
     if args.frame_step is not None:
