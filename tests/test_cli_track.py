@@ -91,7 +91,7 @@ def test_config_file_settings_and_errors(sequence, tmp_path, capsys):
     config.write_text("capacity = -4\n")
     assert main(["track", str(sequence / "det" / "det.txt"), "--config", str(config),
                  "-o", str(out), "--force"]) == 1
-    assert f"{config}: capacity must be at least 16" in capsys.readouterr().err
+    assert f"{config}: capacity must be between 0 and 10000000" in capsys.readouterr().err
 
 
 def test_track_help_explains_the_models(capsys):

@@ -282,6 +282,9 @@ def test_config_from_toml(tmp_path):
     ("edge_noise = 0\n", "edge_noise must be a positive number"),
     ('camera_motion = "orb"\n', "camera_motion must be one of"),
     ("confirm_hits = 6\n", "confirm_hits must be between 1 and confirm_window"),
+    ("lbp_max_iterations = 100000000\n", "lbp_max_iterations must be between 1 and 100000"),
+    ("capacity = 100000000\n", "capacity must be between 0 and 10000000"),
+    ("frame_step = 0\n", "frame_step must be between 1 and 10000"),
     ("velocity_time = 0\n", "velocity_time must be a positive number of seconds"),
     ("edge_noise = \n", "not valid TOML"),
 ])

@@ -27,6 +27,11 @@ from occtrack.errors import OcctrackError
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
 CAMERA_MOTION_NAMES = ("detections", "none")
+# integer settings whose size sets memory or run time: far beyond any scene, short of a hang
+INTEGER_RANGES = {"frame_step": (1, 10_000), "capacity": (0, 10_000_000),
+                  "max_labels": (0, 1_000_000), "max_components_per_object": (0, 100_000),
+                  "lbp_max_iterations": (1, 100_000), "confirm_hits": (1, 1_000),
+                  "confirm_window": (1, 1_000)}
 
 
 @dataclass(frozen=True)
@@ -126,6 +131,10 @@ class TrackerConfig:
         if self.occlusion not in OCCLUSION_NAMES:
             raise ValueError(f"occlusion must be one of {', '.join(OCCLUSION_NAMES)}, "
                              f"not {self.occlusion!r}")
+        for name, (low, high) in INTEGER_RANGES.items():
+            value = getattr(self, name)
+            if not low <= value <= high:
+                raise ValueError(f"{name} must be between {low} and {high}, not {value}")
         if self.camera_motion not in CAMERA_MOTION_NAMES:
             raise ValueError(f"camera_motion must be one of {', '.join(CAMERA_MOTION_NAMES)}, "
                              f"not {self.camera_motion!r}")

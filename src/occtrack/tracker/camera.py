@@ -55,7 +55,11 @@ def estimate_shift(previous: np.ndarray, current: np.ndarray, height_ratio: floa
     unit = scale[near]
     gap = np.abs(candidates[:, None, :] - candidates[None, :, :]).max(axis=-1)
     votes = (gap < mode_radius * np.minimum(unit[:, None], unit[None, :])).sum(axis=1)
-    mode = candidates[np.argmax(votes)]
+    # ties go to the smallest shift, then the lowest (dx, dy): the order of the boxes is no
+    # information
+    top = np.flatnonzero(votes == votes.max())
+    tied = candidates[top]
+    mode = tied[np.lexsort((tied[:, 1], tied[:, 0], np.abs(tied).sum(axis=1)))[0]]
     moved = previous.copy()
     moved[:, :2] += mode
     iou = _iou(moved, current)

@@ -139,6 +139,8 @@ class Tracker:
                                  & (centre_std.max(axis=1) < c.report_centre_std * height))
         shown = np.flatnonzero(f.slot_used & (r > c.report_existence) & trusted)
         fresh = shown[self._reported_serial[shown] != f.slot_serial[shown]]
+        # new ids in image order (centre x, then y), not in the order the detections came
+        fresh = fresh[np.lexsort((means[fresh, 1, 0], means[fresh, 0, 0]))]
         self._report_id[fresh] = self._next_id + np.arange(len(fresh))
         self._reported_serial[fresh] = f.slot_serial[fresh]
         self._next_id += len(fresh)
