@@ -294,3 +294,28 @@ def test_config_errors_name_the_file(tmp_path, text, message):
     with pytest.raises(OcctrackError, match=message) as err:
         TrackerConfig.from_toml(path)
     assert str(err.value).startswith(f"{path}: ")
+
+
+def test_run_streams_frames_and_refuses_a_path():
+    """`run` reads a generator one frame at a time (never a list of all), and a file name
+    is refused with a pointer to the reader, not iterated character by character."""
+    seen = []
+
+    def frames():
+        for k in range(12):
+            seen.append(k)
+            yield np.array([[300.0 + 5 * k, 400.0, 40.0, 120.0, 0.9]])
+
+    tracker = Tracker()
+    step = tracker.step
+    read_when_stepped = []
+
+    def counting_step(*args, **kwargs):
+        read_when_stepped.append(len(seen))
+        return step(*args, **kwargs)
+
+    tracker.step = counting_step
+    result = tracker.run(frames())
+    assert result.frames == 12 and read_when_stepped == list(range(1, 13))
+    with pytest.raises(TypeError, match="read_mot"):
+        Tracker().run("det.txt")

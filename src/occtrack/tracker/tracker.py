@@ -159,13 +159,24 @@ class Tracker:
 
         `detections` is a MotTable (frames 1..num_frames) or one array per frame, (M, 4) boxes
         or (M, 5) boxes and scores. Every `frame_step`-th frame is tracked, starting with the
-        first; in between, the last tracks are carried along their velocities."""
-        frames = list(_frames(detections, num_frames))
+        first; in between, the last tracks are carried along their velocities. Frames are
+        read one at a time, so a long stream is never held in memory (only the result rows)."""
+        if isinstance(detections, str | bytes):
+            raise TypeError("detections must be a MotTable or an iterable of (M, 4) or (M, 5) "
+                            "arrays; read a file with occtrack.io.mot.read_mot first")
+        total = num_frames
+        if total is None and isinstance(detections, MotTable):
+            total = detections.num_frames
+        elif total is None and hasattr(detections, "__len__"):
+            total = len(detections)
         c = self.config
         rows_frame, rows_id, rows_box, rows_r = [], [], [], []
         tracks = None
         start = time.perf_counter()
-        for index, (boxes, scores) in enumerate(progress(frames, len(frames), desc, quiet)):
+        count = 0
+        for index, (boxes, scores) in enumerate(progress(_frames(detections, num_frames), total,
+                                                         desc, quiet)):
+            count += 1
             offset = index % c.frame_step
             if offset == 0:
                 tracks = self.step(boxes, scores)
@@ -177,12 +188,11 @@ class Tracker:
             rows_box.append(shown.boxes)
             rows_r.append(shown.existence)
         seconds = time.perf_counter() - start
-        if not frames:
+        if not count:
             return TrackResult(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 4)),
                                np.zeros(0), 0, seconds)
         return TrackResult(np.concatenate(rows_frame), np.concatenate(rows_id),
-                           np.concatenate(rows_box), np.concatenate(rows_r), len(frames),
-                           seconds)
+                           np.concatenate(rows_box), np.concatenate(rows_r), count, seconds)
 
 
 def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np.ndarray]]:
