@@ -120,3 +120,14 @@ def simulate_beams(x: float | None, model: BeamModel, n: int,
         owner = np.repeat(np.arange(n), counts)
         np.minimum.at(best, owner, rng.uniform(0, model.max_range, counts.sum()))
     return best
+
+
+def empirical_ratio(model: BeamModel, x: float, edges: np.ndarray, n: int,
+                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Histogram ratio of simulated beams with and without the object at x, per bin of
+    `edges`, and its standard error: the Monte Carlo check of `likelihood_ratio`."""
+    with_obj = np.histogram(simulate_beams(x, model, n, rng), edges)[0]
+    without = np.histogram(simulate_beams(None, model, n, rng), edges)[0]
+    ratio = with_obj / np.maximum(without, 1)
+    se = ratio * np.sqrt(1 / np.maximum(with_obj, 1) + 1 / np.maximum(without, 1))
+    return ratio, se

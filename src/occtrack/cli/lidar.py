@@ -11,9 +11,8 @@ from occtrack.cli.arguments import positive_int, seed_int
 from occtrack.errors import OcctrackError
 
 if TYPE_CHECKING:
-    import numpy as np
 
-    from occtrack.lidar import BeamModel
+    pass
 
 NAME = "lidar"
 HELP = "the occlusion-tolerant lidar beam likelihood that measurement-wise occlusion derives"
@@ -45,24 +44,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite an existing figure")
 
 
-def empirical_ratio(model: BeamModel, x: float, edges: np.ndarray, n: int,
-                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Histogram ratio of beams with and without the object, and its standard error."""
-    import numpy as np
-
-    from occtrack.lidar import simulate_beams
-
-    with_obj = np.histogram(simulate_beams(x, model, n, rng), edges)[0]
-    without = np.histogram(simulate_beams(None, model, n, rng), edges)[0]
-    ratio = with_obj / np.maximum(without, 1)
-    se = ratio * np.sqrt(1 / np.maximum(with_obj, 1) + 1 / np.maximum(without, 1))
-    return ratio, se
-
-
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from occtrack.lidar import BeamModel, likelihood_ratio, regime
+    from occtrack.lidar import BeamModel, empirical_ratio, likelihood_ratio, regime
 
     try:
         model = BeamModel(args.p_d, args.sigma, args.clutter_rate, args.max_range)

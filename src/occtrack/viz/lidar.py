@@ -6,15 +6,13 @@ from pathlib import Path
 
 import numpy as np
 
-from occtrack.lidar import BeamModel, likelihood_ratio
+from occtrack.lidar import BeamModel, empirical_ratio, likelihood_ratio
 from occtrack.viz.frame import check_new
 from occtrack.viz.output import save
 
 
 def draw_beam_likelihood(path: str | Path, model: BeamModel, x: float,
                          rng: np.random.Generator, samples: int, overwrite: bool = False) -> None:
-    from occtrack.cli.lidar import empirical_ratio
-
     path = check_new(path, overwrite)
     import matplotlib
 
