@@ -596,6 +596,10 @@ def test_birth_size_prior_from_settings_defaults_and_detections():
     mean, std = f._size_prior()
     # mean (10 + 14) / 2, (30 + 40) / 2; std sqrt(mean of squares - square of mean)
     assert mean == pytest.approx([12.0, 35.0]) and std == pytest.approx([2.0, 5.0])
+    g = make()
+    for _ in range(2):  # two boxes of one size: no spread, so the 1 px floor of the variance
+        g._learn_sizes(first, g.measurement.observed(first))
+    assert g._size_prior()[1].tolist() == [1.0, 1.0]
 
 
 def test_a_new_filter_is_empty_and_counts_its_steps():
