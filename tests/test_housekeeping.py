@@ -293,15 +293,15 @@ def test_merge_leaves_distinct_cells_alone():
 
 
 def test_existence_is_capped_at_one_and_only_there():
-    """Object 3 (the last slot) reached r = 1.2 (by rounding, say): scaled to 1, its density
-    unchanged. Object 1 and the Poisson part (an intensity, which may exceed 1) are left as
-    they are."""
+    """Objects 0 and 3 (the first and last slot) reached r = 1.5 and 1.2 (by rounding, say):
+    scaled to 1, their densities unchanged. Objects 1 and 2 and the Poisson part (an
+    intensity, which may exceed 1) are left as they are."""
     f = make()
-    load(f, [0.7, 0.5, 0.3, 0.2, 3.0, 0.6, 0.4], [3, 3, 1, 1, -1, 2, 2])
+    load(f, [0.7, 0.5, 0.3, 0.2, 3.0, 0.6, 0.4, 1.5], [3, 3, 1, 1, -1, 2, 2, 0])
     f._cap_existence()
     r = f.existence()
-    assert r[3] == pytest.approx(1.0, abs=1e-15) and (r <= 1.0).all()
-    assert f.mass[:2] == pytest.approx([0.7 / 1.2, 0.5 / 1.2], rel=1e-15)
+    assert r[[0, 3]] == pytest.approx([1.0, 1.0], abs=1e-15) and (r <= 1.0).all()
+    assert f.mass[[0, 1, 7]] == pytest.approx([0.7 / 1.2, 0.5 / 1.2, 1.0], rel=1e-15)
     assert f.mass[2:7].tolist() == [0.3, 0.2, 3.0, 0.6, 0.4]  # r = 1 exactly is not over
 
 
