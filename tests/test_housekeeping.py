@@ -16,6 +16,7 @@ import pytest
 # gmpmb -> tracker.config -> tracker/__init__ -> tracker.tracker -> gmpmb
 import occtrack.tracker  # noqa: F401
 from occtrack.filters.gmpmb import N_BIRTH, GaussianMixturePMB
+from occtrack.models.box import edges_from_ltwh
 from occtrack.occlusion.base import NoOcclusion, OcclusionTerms
 from occtrack.tracker import TrackerConfig
 
@@ -118,6 +119,13 @@ def test_select_keeps_the_heaviest_children_when_over_capacity():
     assert np.sort(flat[keep]) == pytest.approx(np.linspace(0.01, 0.3, 25)[-room:], abs=0)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_select_keeps_exactly_the_heaviest_of_many(seed):
+    f = make(capacity=64)
+    flat = np.random.default_rng(seed).random(2000)
+    assert np.array_equal(f._select(flat), np.sort(np.argsort(-flat)[:64 - N_BIRTH]))
+
+
 def test_select_below_capacity_only_prunes():
     f = make()
     flat = np.array([0.2, 1e-6, 0.0, 0.3, 1e-5, 2e-5, 0.1])  # prune_mass 1e-5 is dropped too
@@ -160,12 +168,12 @@ def test_an_update_over_capacity_keeps_the_heaviest_children_unscaled(monkeypatc
 
 
 def test_trim_keeps_each_objects_heaviest_and_its_existence():
-    """Bernoulli 0 has five children, 1 two, the one born from measurement 1 four; the Poisson
+    """Bernoulli 0 has five children, 3 two, the one born from measurement 1 four; the Poisson
     part's miss children (label -1, no measurement) are the intensity and are not trimmed."""
     f = make(max_components_per_object=3)
     mass = np.array([0.1, 0.4, 0.05, 0.3, 0.15, 0.2, 0.1, 0.3, 0.2, 0.1, 0.05, 0.5, 0.4, 0.3,
                      0.2])
-    label = np.array([0] * 5 + [1] * 2 + [-1] * 8)
+    label = np.array([0] * 5 + [3] * 2 + [-1] * 8)
     meas = np.array([-1, 0, -1, 2, 1, -1, 0, 1, 1, 1, 1, -1, -1, -1, -1])
     order = np.random.default_rng(1).permutation(len(mass))  # the order must not matter
     mass, label, meas = mass[order], label[order], meas[order]
@@ -173,7 +181,7 @@ def test_trim_keeps_each_objects_heaviest_and_its_existence():
     before = mass.copy()
     keep = f._trim_objects(mass, label, meas)
 
-    for g, kept_masses in ((0, [0.4, 0.3, 0.15]), (1, [0.2, 0.1]), (10, [0.3, 0.2, 0.1])):
+    for g, kept_masses in ((0, [0.4, 0.3, 0.15]), (3, [0.2, 0.1]), (10, [0.3, 0.2, 0.1])):
         mine = group == g
         assert sorted(before[keep & mine]) == pytest.approx(sorted(kept_masses), abs=0)
         assert mass[keep & mine].sum() == pytest.approx(before[mine].sum(), abs=1e-12)
@@ -193,26 +201,29 @@ def test_trim_with_room_to_spare_changes_nothing():
 
 
 def test_a_bernoulli_born_this_step_keeps_at_most_its_share_of_components():
-    """Six Poisson components near one detection: the new Bernoulli of that detection is the
-    six hit children; it keeps its two heaviest, rescaled to its existence
-    L_0 / (kappa p_F + L_0). (Trimming used to skip label -1, so a newborn kept all six.)"""
+    """Six Poisson components near one detection, and one object (slot 0) far from it: the new
+    Bernoulli of that detection is the six hit children; it keeps its two heaviest, rescaled
+    to its existence L_0 / (kappa p_F + L_0). (Trimming used to skip label -1, so a newborn
+    kept all six.) The far object is only missed: r <- r miss / (1 - r + r miss)."""
     f = make(max_components_per_object=2, clutter_rate=clutter_rate(1e-8), capacity=32)
-    means = np.stack([person(900.0 + 2.0 * k) for k in range(6)])
+    means = np.stack([person(900.0 + 2.0 * k) for k in range(6)] + [person(100.0)])
     w = np.array([0.3, 0.5, 0.2, 0.6, 0.4, 0.1])
     occ = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.6])  # kept by a hit with v = 1: names the parent
-    load(f, w, [-1] * 6, means, det=0.8, occ=occ)
+    load(f, [*w, 0.5], [-1] * 6 + [0], means, det=0.8, occ=[*occ, 0.5])
     z = edges(person(905.0))
-    lik = np.exp(f.measurement.loglik(f.mean[:6], f.cov[:6], z, f.measurement.observed(z)))[:, 0]
-    hits = w * 0.8 * lik
+    lik = np.exp(f.measurement.loglik(f.mean[:7], f.cov[:7], z, f.measurement.observed(z)))[:, 0]
+    assert lik[6] == 0.0  # out of reach of the detection
+    hits = w * 0.8 * lik[:6]
     born = hits / (1e-8 + hits.sum())
     f._update(z, f.measurement.observed(z), np.ones(1))
 
     g = groups(f)
-    assert sorted(g) == [-1, 0]
-    assert len(g[0]) == 2
-    assert f.mass[g[0]].sum() == pytest.approx(born.sum(), rel=1e-12)
+    assert sorted(g) == [-1, 0, 1]
+    assert f.existence()[0] == pytest.approx(0.5 * 0.2 / (1 - 0.5 + 0.5 * 0.2), rel=1e-12)
+    assert len(g[1]) == 2
+    assert f.mass[g[1]].sum() == pytest.approx(born.sum(), rel=1e-12)
     heaviest = occ[np.argsort(-born)[:2]]
-    assert sorted(f.occ[g[0]]) == pytest.approx(sorted(heaviest), rel=1e-12)
+    assert sorted(f.occ[g[1]]) == pytest.approx(sorted(heaviest), rel=1e-12)
     # the Poisson part's miss children stay, each w (1 - d)
     assert sorted(f.mass[g[-1]]) == pytest.approx(sorted(w * 0.2), rel=1e-12)
 
@@ -221,28 +232,29 @@ def test_a_bernoulli_born_this_step_keeps_at_most_its_share_of_components():
 
 
 def test_merge_is_moment_matching():
-    # cells are in box heights, the height rounded to a power of two: 128 px for these boxes
-    """a and b (object 0) share a 10 px / 10 px/s cell, c (object 0) does not, d (object 1)
-    sits on a but belongs to another object, e1 and e2 are Poisson components in one cell."""
+    """a and b (object 0) share a 10 px / 10 px/s cell; c (object 0) lies between them in the
+    input and differs from a only in its horizontal centre cell; d sits on a but belongs to
+    object 1; e1 and e2 are Poisson components in one cell with e3, in another, between them."""
     f = make(merge_position=10.0 / 128, merge_velocity=10.0 / 128)
     rng = np.random.default_rng(2)
     means = np.array([
         [[101.0, 1.0, 31.0], [402.0, -3.0, 62.0]],  # a
+        [[150.0, 1.0, 31.0], [402.0, -3.0, 62.0]],  # c
         [[108.0, 8.0, 38.0], [407.0, -9.0, 68.0]],  # b
-        [[150.0, 0.0, 30.0], [400.0, 0.0, 60.0]],  # c
         [[101.0, 1.0, 31.0], [402.0, -3.0, 62.0]],  # d
         [[501.0, 2.0, 21.0], [301.0, 2.0, 51.0]],  # e1
+        [[700.0, 2.0, 21.0], [301.0, 2.0, 51.0]],  # e3
         [[509.0, 7.0, 29.0], [308.0, 9.0, 59.0]],  # e2
     ])
-    root = rng.normal(size=(6, 2, 3, 3))
+    root = rng.normal(size=(7, 2, 3, 3))
     covs = root @ np.swapaxes(root, -1, -2) + np.eye(3)
-    mass = np.array([0.3, 0.15, 0.2, 0.35, 0.05, 0.02])
-    det = np.array([0.9, 0.5, 0.7, 0.6, 0.2, 0.8])
-    occ = np.array([0.2, 0.7, 0.4, 0.5, 0.9, 0.1])
-    label = np.array([0, 0, 0, 1, -1, -1])
-    coast = np.array([0.0, 0.1, 0.0, 0.2, 0.0, 0.0])
+    mass = np.array([0.3, 0.2, 0.15, 0.35, 0.05, 0.03, 0.02])
+    det = np.array([0.9, 0.7, 0.5, 0.6, 0.2, 0.4, 0.8])
+    occ = np.array([0.2, 0.4, 0.7, 0.5, 0.9, 0.3, 0.1])
+    label = np.array([0, 0, 0, 1, -1, -1, -1])
+    coast = np.array([0.0, 0.1, 0.0, 0.2, 0.0, 0.05, 0.0])
     out = f._merge(mass, means, covs, det, occ, coast, label)
-    assert len(out[0]) == 4
+    assert len(out[0]) == 5
 
     def pooled(idx):
         w = mass[idx]
@@ -256,7 +268,7 @@ def test_merge_is_moment_matching():
         return (w.sum(), mu, sigma, share @ det[idx], share @ occ[idx], share @ coast[idx],
                 label[idx[0]])
 
-    expected = [pooled([0, 1]), pooled([2]), pooled([3]), pooled([4, 5])]
+    expected = [pooled([0, 2]), pooled([1]), pooled([3]), pooled([4, 6]), pooled([5])]
     for w, mu, sigma, d, o, t, lab in expected:
         (k,) = np.flatnonzero(np.isclose(out[0], w, rtol=1e-12, atol=0))
         assert out[1][k] == pytest.approx(mu, rel=1e-12)
@@ -266,8 +278,19 @@ def test_merge_is_moment_matching():
             pytest.approx(t, rel=1e-12), lab)
     # the spread of the means is a large part of the merged covariance: dropping it shows
     ab = expected[0][2]
-    without_spread = (mass[0] * covs[0] + mass[1] * covs[1]) / (mass[0] + mass[1])
+    without_spread = (mass[0] * covs[0] + mass[2] * covs[2]) / (mass[0] + mass[2])
     assert np.abs(ab - without_spread).max() > 5.0
+
+
+def test_two_components_in_one_cell_merge():
+    f = make(merge_position=10.0 / 128, merge_velocity=10.0 / 128)
+    means = np.stack([person(101.0), person(104.0)])
+    covs = np.broadcast_to(np.eye(3), (2, 2, 3, 3)).copy()
+    out = f._merge(np.array([0.1, 0.3]), means, covs, np.array([0.2, 0.6]),
+                   np.array([0.5, 0.1]), np.zeros(2), np.zeros(2, dtype=np.int64))
+    assert out[0].tolist() == [pytest.approx(0.4)] and out[1][0, 0, 0] == pytest.approx(103.25)
+    assert out[2][0, 0, 0, 0] == pytest.approx(1 + 0.25 * 2.25**2 + 0.75 * 0.75**2)
+    assert (out[3][0], out[4][0]) == (pytest.approx(0.5), pytest.approx(0.2))
 
 
 def test_merge_leaves_distinct_cells_alone():
@@ -283,14 +306,15 @@ def test_merge_leaves_distinct_cells_alone():
 
 
 def test_existence_is_capped_at_one_and_only_there():
-    """Object 0 reached r = 1.2 (by rounding, say): scaled to 1, its density unchanged. Object
-    1 and the Poisson part (an intensity, which may exceed 1) are left as they are."""
+    """Objects 0 and 3 (the first and last slot) reached r = 1.5 and 1.2 (by rounding, say):
+    scaled to 1, their densities unchanged. Objects 1 and 2 and the Poisson part (an
+    intensity, which may exceed 1) are left as they are."""
     f = make()
-    load(f, [0.7, 0.5, 0.3, 0.2, 3.0, 0.6, 0.4], [0, 0, 1, 1, -1, 2, 2])
+    load(f, [0.7, 0.5, 0.3, 0.2, 3.0, 0.6, 0.4, 1.5], [3, 3, 1, 1, -1, 2, 2, 0])
     f._cap_existence()
     r = f.existence()
-    assert r[0] == pytest.approx(1.0, abs=1e-15) and (r <= 1.0).all()
-    assert f.mass[:2] == pytest.approx([0.7 / 1.2, 0.5 / 1.2], rel=1e-15)
+    assert r[[0, 3]] == pytest.approx([1.0, 1.0], abs=1e-15) and (r <= 1.0).all()
+    assert f.mass[[0, 1, 7]] == pytest.approx([0.7 / 1.2, 0.5 / 1.2, 1.0], rel=1e-15)
     assert f.mass[2:7].tolist() == [0.3, 0.2, 3.0, 0.6, 0.4]  # r = 1 exactly is not over
 
 
@@ -320,6 +344,51 @@ def test_the_weakest_labels_are_recycled_when_slots_run_out():
     out = f._assign_labels(mass, label, newborn, 2)
     assert out.tolist() == [0, -1, 1, -1]  # r 0.9 and 0.6 keep slots, 0.2 and 0.1 go
     assert f.slot_used.tolist() == [True, True]
+
+
+def test_label_min_existence_is_inclusive_and_empty_objects_are_recycled():
+    """r exactly at label_min_existence keeps (or gets) a label; a slot left with no component
+    (all its children pruned) is freed."""
+    f = make(max_labels=4, label_min_existence=0.25)
+    f.slot_used[:] = [True, False, False, True]  # slot 3: no component left
+    out = f._assign_labels(np.full(4, 0.125), np.array([0, 0, -1, -1]), np.array([-1, -1, 0, 0]),
+                           1)
+    assert out[:2].tolist() == [0, 0] and out[2] == out[3] > 0
+    assert f.slot_used.sum() == 2 and f.slot_used[0] and f.slot_used[out[2]]
+
+
+def test_a_measurement_without_a_new_bernoulli_gets_no_slot():
+    f = make(max_labels=4, label_min_existence=0.0)
+    out = f._assign_labels(np.array([0.2]), np.array([-1]), np.array([1]), 3)
+    assert f.slot_used.sum() == 1 and f.slot_used[out[0]]  # measurements 0 and 2: nothing born
+
+
+def test_every_new_bernoulli_gets_a_serial_never_used_before():
+    """A slot freed and taken again holds a new object: the tracker tells them apart by the
+    serial, so serials are never reused."""
+    f = make(max_labels=4)
+    serials = []
+    for _ in range(3):
+        # the last round's objects have no component left: two new ones take their slots
+        out = f._assign_labels(np.array([0.5, 0.4]), np.array([-1, -1]), np.array([0, 1]), 2)
+        slots = sorted(set(out.tolist()))
+        assert len(slots) == 2 and f.slot_used.sum() == 2
+        serials += f.slot_serial[slots].tolist()
+    assert len(set(serials)) == 6 and min(serials) >= 0
+
+
+def test_sort_by_label_puts_the_poisson_part_first_and_keeps_order_within_a_label():
+    f = make(capacity=64)
+    label = np.random.default_rng(3).integers(-1, 3, size=40)
+    load(f, np.arange(1.0, 41.0), label)
+    f._sort_by_label()
+    assert np.array_equal(f.label[:40], np.sort(label))
+    for k in (-1, 0, 1, 2):  # stable: within a label, the original order
+        assert np.array_equal(f.mass[:40][f.label[:40] == k], np.flatnonzero(label == k) + 1.0)
+    load(f, [1.0, 2.0, 3.0], [1, 2, -1])  # every component out of place
+    f._sort_by_label()
+    assert f.label[:3].tolist() == [-1, 1, 2] and f.mass[:3].tolist() == [3.0, 1.0, 2.0]
+    assert f.mean[:3, 0, 0].tolist() == [980.0, 900.0, 940.0]
 
 
 def test_a_weak_bernoulli_is_recycled_into_the_poisson_part_with_its_mass():
@@ -369,16 +438,12 @@ def test_features_after_misses_equal_bayes(misses):
     assert o > 0.8  # missed where it could hide: more occludable than the stationary 0.8
 
 
-def test_features_after_a_hit_equal_bayes():
-    """One object (r 0.8, d 0.7, o 0.6), one detection near it, v = 0.6, q = 0.3, h = 0.25.
-    The association is exact for one object and one detection:
-    p_hit = L / (L + miss_obj kappa'), L = r P(seen | D, O averaged) p(z | x),
-    kappa' = kappa (1 - o_stationary h). The hit child has D = 1 and O by Bayes with the
-    hit likelihood; the miss child has both by Bayes with the miss likelihood."""
-    v, q, h = 0.6, 0.3, 0.25
-    kappa = 1e-7
-    f = make(FixedTerms(v, q, h), clutter_rate=clutter_rate(kappa))
-    load(f, [0.8], [0], det=0.7, occ=0.6)
+def one_hit(f, v, q, h, kappa, score=1.0):
+    """Expected children of one object (r 0.8, d 0.7, o 0.6, the only component) hit by one
+    detection near it. The association is exact for one object and one detection:
+    p_hit = L / (L + miss_obj kappa'), L = r P(seen) p(z | x), kappa' the clutter density of
+    the detection's score, times (1 - o_stationary h). Returns the detection and, for the hit
+    and the miss child, (mass, d, o)."""
     z = edges(person(905.0, 396.0))
     lik = np.exp(f.measurement.loglik(f.mean[:1], f.cov[:1], z,
                                       f.measurement.observed(z)))[0, 0]
@@ -386,17 +451,176 @@ def test_features_after_a_hit_equal_bayes():
     d_hit, o_hit, seen = features_after(0.7, 0.6, hit_likelihood(v, h))
     big_l = 0.8 * seen * lik
     miss_obj = 1 - 0.8 + 0.8 * miss
-    clutter = kappa * (1 - f.config.occludability * h)
+    clutter = kappa * min(max(score, 0.05), 1.0) ** -2 * (1 - f.config.occludability * h)
     p_hit = big_l / (big_l + miss_obj * clutter)
     assert 0.2 < p_hit < 0.98  # both children matter
-    f._update(z, f.measurement.observed(z), np.ones(1))
+    return z, (p_hit, d_hit, o_hit), (0.8 * miss * (1 - p_hit) / miss_obj, d_miss, o_miss)
+
+
+@pytest.mark.parametrize("score", [1.0, 0.5, 0.01, 1.5])
+def test_features_after_a_hit_equal_bayes(score):
+    """v = 0.6, q = 0.3, h = 0.25. The hit child has D = 1 and O by Bayes with the hit
+    likelihood; the miss child has both by Bayes with the miss likelihood. The clutter density
+    of a detection is kappa / clip(score, 0.05, 1)^2 (kappa chosen so that it is the same)."""
+    v, q, h = 0.6, 0.3, 0.25
+    kappa = 1e-7 * min(max(score, 0.05), 1.0) ** 2
+    f = make(FixedTerms(v, q, h), clutter_rate=clutter_rate(kappa))
+    load(f, [0.8], [0], det=0.7, occ=0.6)
+    z, hit_child, miss_child = one_hit(f, v, q, h, kappa, score)
+    f._update(z, f.measurement.observed(z), np.array([score]))
 
     assert f.n == 2 and (f.label[:2] == 0).all()
     hit, missed = (0, 1) if f.det[0] == 1.0 else (1, 0)
-    assert f.det[hit] == 1.0 and d_hit == 1.0
-    assert f.occ[hit] == pytest.approx(o_hit, rel=1e-12)
-    assert f.mass[hit] == pytest.approx(p_hit, rel=1e-9)
-    assert (f.det[missed], f.occ[missed]) == (pytest.approx(d_miss, rel=1e-12),
-                                              pytest.approx(o_miss, rel=1e-12))
-    assert f.mass[missed] == pytest.approx(0.8 * miss * (1 - p_hit) / miss_obj, rel=1e-9)
-    assert o_hit < 0.6 < o_miss
+    assert f.det[hit] == 1.0 and hit_child[1] == 1.0
+    assert f.occ[hit] == pytest.approx(hit_child[2], rel=1e-12)
+    assert f.mass[hit] == pytest.approx(hit_child[0], rel=1e-9)
+    assert (f.det[missed], f.occ[missed]) == (pytest.approx(miss_child[1], rel=1e-12),
+                                              pytest.approx(miss_child[2], rel=1e-12))
+    assert f.mass[missed] == pytest.approx(miss_child[0], rel=1e-9)
+    assert hit_child[2] < 0.6 < miss_child[2]
+    assert f.iterations >= 1
+
+
+def test_hit_and_miss_children_in_one_cell_merge_with_averaged_features():
+    """The same step with cells 1000 px (px/s) wide: the two children become one component
+    with their total mass and their mass-weighted d and o."""
+    v, q, h = 0.6, 0.3, 0.25
+    f = make(FixedTerms(v, q, h), clutter_rate=clutter_rate(1e-7), merge_position=1000.0 / 128,
+             merge_velocity=1000.0 / 128)
+    load(f, [0.8], [0], np.stack([person(900.0, 400.0, vx=500.0, vy=500.0)]), det=0.7, occ=0.6)
+    z, hit_child, miss_child = one_hit(f, v, q, h, 1e-7)
+    f._update(z, f.measurement.observed(z), np.ones(1))
+    (w1, d1, o1), (w2, d2, o2) = hit_child, miss_child
+    assert f.n == 1 and f.mass[0] == pytest.approx(w1 + w2, rel=1e-9)
+    assert f.det[0] == pytest.approx((w1 * d1 + w2 * d2) / (w1 + w2), rel=1e-9)
+    assert f.occ[0] == pytest.approx((w1 * o1 + w2 * o2) / (w1 + w2), rel=1e-9)
+
+
+@pytest.mark.parametrize("raw,clipped", [((-0.3, 0.2, 0.1), (0.0, 0.2, 0.1)),
+                                         ((0.5, -0.4, -0.2), (0.5, 0.0, 0.0)),
+                                         ((1.7, 1.6, 1.3), (1.0, 1.0, 1.0))])
+def test_occlusion_terms_outside_zero_one_are_clipped(raw, clipped):
+    """A model's v, q and h are probabilities: values outside [0, 1] act as the nearest end."""
+    results = []
+    for terms in (raw, clipped):
+        f = make(FixedTerms(*terms), clutter_rate=clutter_rate(1e-7))
+        load(f, [0.8, 0.3], [0, -1], np.stack([person(), person(930.0)]), det=0.7, occ=0.6)
+        z = edges(person(905.0, 396.0))
+        f._update(z, f.measurement.observed(z), np.ones(1))
+        n = f.n
+        results.append([f.mass[:n].copy(), f.det[:n].copy(), f.occ[:n].copy(), f.label[:n]])
+    for a, b in zip(*results, strict=True):
+        assert np.array_equal(a, b)
+
+
+class Recorder(FixedTerms):
+    """Keeps a copy of what the filter shows the occlusion model."""
+
+    def terms(self, ctx):
+        self.weights, self.owner = np.array(ctx.weights), np.array(ctx.owner)
+        self.existence, self.covs = np.array(ctx.existence), ctx.covs
+        self.means, self.n_measurements = np.array(ctx.means), len(ctx.measurements)
+        return super().terms(ctx)
+
+
+def test_the_occlusion_model_sees_each_components_weight_within_its_object():
+    """OcclusionContext: weight w_k / r_i for a component of object i and w_k for the Poisson
+    part, existence r of every slot, owner the labels, and the components' states."""
+    model = Recorder(1.0, 0.0)
+    f = make(model)
+    load(f, [0.3, 0.7, 0.1, 0.5, 0.2], [0, -1, 0, 2, -1])
+    states = f.mean[:5].copy()
+    f._update(*EMPTY)
+    for k, weights in {0: [0.75, 0.25], 2: [1.0], -1: [0.7, 0.2]}.items():
+        mine = model.owner == k
+        assert sorted(model.weights[mine]) == pytest.approx(sorted(weights), rel=1e-12)
+    assert model.existence == pytest.approx([0.4, 0.0, 0.5, 0.0], rel=1e-12)
+    assert sorted(model.means[:, 0, 0]) == sorted(states[:, 0, 0])
+    assert model.covs is not None and model.covs.shape == (5, 2, 3, 3)
+    assert model.n_measurements == 0
+
+
+# -- prediction, births, the size prior -------------------------------------------------------
+
+
+def test_survival_depends_on_the_centre_being_in_the_image():
+    """P_S = exp(-death_rate dt) while the box centre is in the image (its edges included) and
+    both half-sizes are at least 1 px, else exit_survival."""
+    f = make()
+    W, H = f.config.image_size
+    states = [person(900.0), person(0.0), person(W), person(900.0, 0.0), person(900.0, H),
+              person(900.0, half=(1.0, 1.0)),
+              person(-0.5), person(W + 0.5), person(900.0, -0.5), person(900.0, H + 0.5),
+              person(900.0, half=(0.99, 60.0)), person(900.0, half=(20.0, 0.99))]
+    inside = np.arange(len(states)) < 6
+    load(f, np.full(len(states), 0.5), np.full(len(states), -1), np.stack(states))
+    f._predict()
+    survival = np.exp(-f.config.death_rate * f.config.dt)
+    expected = 0.5 * np.where(inside, survival, f.config.exit_survival)
+    assert f.mass[:f.n] == pytest.approx(expected, rel=1e-15)
+
+
+def test_births_join_the_poisson_part_at_the_edges_and_everywhere():
+    """Four edge components (mass edge rate x dt, centred on the edge, moving inward) and one
+    spread over the image (spread rate x dt, plus the initial objects at the first step).
+    Speeds are in box heights of the size prior (120 px here): 0.375 h/s is 45 px/s."""
+    f = make(edge_birth_rate=6.0, spread_birth_rate=3.0, initial_objects=50.0,
+             inward_speed=0.375, birth_speed_std=0.75, birth_half_size=(20.0, 60.0),
+             birth_half_size_std=(4.0, 9.0), birth_detectability=0.85, birth_occludability=0.4)
+    dt = f.config.dt
+    W, H = f.config.image_size
+    f._add_births()
+    assert f.n == 5 and (f.label[:5] == -1).all()
+    assert f.mass[:5] == pytest.approx([6 * dt] * 4 + [3 * dt + 50.0], rel=1e-15)
+    assert (f.det[:5] == 0.85).all() and (f.occ[:5] == 0.4).all()
+    half = [20.0, 60.0]
+    expected = np.array([[[0, 45, 20], [H / 2, 0, 60]], [[W, -45, 20], [H / 2, 0, 60]],
+                         [[W / 2, 0, 20], [0, 45, 60]], [[W / 2, 0, 20], [H, -45, 60]],
+                         [[W / 2, 0, 20], [H / 2, 0, 60]]])
+    assert np.array_equal(f.mean[:5], expected)
+    sd = np.array([[[half[0], 90, 4], [H / 2, 90, 9]], [[half[0], 90, 4], [H / 2, 90, 9]],
+                   [[W / 2, 90, 4], [half[1], 90, 9]], [[W / 2, 90, 4], [half[1], 90, 9]],
+                   [[W / 2, 90, 4], [H / 2, 90, 9]]])
+    assert np.array_equal(f.cov[:5], sd[..., None] ** 2 * np.eye(3))
+
+    f.steps, f.n = 1, 0  # later steps: no initial objects
+    f._add_births()
+    assert f.mass[4] == pytest.approx(3 * dt, rel=1e-15)
+    g = make(spread_birth_rate=0.0)
+    g.steps = 1
+    g._add_births()
+    assert g.n == 4  # a component of mass 0 is not added
+    masses = g.births.components(1, 2, np.array([20.0, 60.0]), np.array([4.0, 9.0]))[0]
+    assert masses.dtype == float
+
+
+def test_birth_size_prior_from_settings_defaults_and_detections():
+    mean, std = make()._size_prior()  # nothing seen: 30 x 90 px half-sizes, std a third
+    assert mean.tolist() == [30.0, 90.0] and std.tolist() == [10.0, 30.0]
+    mean, std = make(birth_half_size=(12.0, 34.0), birth_half_size_std=(1.5, 0.5))._size_prior()
+    assert mean.tolist() == [12.0, 34.0] and std.tolist() == [1.5, 1.0]  # at least 1 px
+
+    f = make()
+    first = edges_from_ltwh([[100.0, 100.0, 20.0, 60.0]])  # half-sizes 10 x 30
+    # 14 x 40, and one on the image border, whose size is not seen
+    second = edges_from_ltwh([[300.0, 100.0, 28.0, 80.0], [0.0, 50.0, 40.0, 40.0]])
+    f._learn_sizes(first, f.measurement.observed(first))
+    assert f._size_prior()[0].tolist() == [30.0, 90.0]  # one detection is not enough
+    f._learn_sizes(second, f.measurement.observed(second))
+    mean, std = f._size_prior()
+    # mean (10 + 14) / 2, (30 + 40) / 2; std sqrt(mean of squares - square of mean)
+    assert mean == pytest.approx([12.0, 35.0]) and std == pytest.approx([2.0, 5.0])
+    g = make()
+    for _ in range(2):  # two boxes of one size: no spread, so the 1 px floor of the variance
+        g._learn_sizes(first, g.measurement.observed(first))
+    assert g._size_prior()[1].tolist() == [1.0, 1.0]
+
+
+def test_a_new_filter_is_empty_and_counts_its_steps():
+    f = make(border_margin=5.0)
+    assert (f.n, f.steps, f.iterations) == (0, 0, 0) and not f.slot_used.any()
+    assert f.measurement.border_margin == 5.0
+    z = edges(person(905.0))
+    for _ in range(2):
+        f.step(z, np.ones(1))
+    assert f.steps == 2 and f.iterations >= 1
