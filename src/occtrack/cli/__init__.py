@@ -33,6 +33,7 @@ COMMANDS = (
     "eval",
     "foursquare",
     "lidar",
+    "render",
     "reproduce",
     "simulate",
     "simulate_detections",
