@@ -10,6 +10,7 @@ import pytest
 
 iio = pytest.importorskip("imageio.v3", reason='needs pip install "occtrack[viz]"')
 pytest.importorskip("PIL", reason='needs pip install "occtrack[viz]"')
+pytest.importorskip("av", reason='needs pip install "occtrack[viz]"')
 
 from occtrack.cli import main  # noqa: E402
 from occtrack.viz.render import PALETTE, Overlay, Painter, colour, image_files  # noqa: E402
@@ -83,15 +84,12 @@ def test_a_result_file_is_drawn_as_it_is_to_a_video_and_a_picture(sequence, tmp_
                               for k in range(1, FRAMES + 1)))
     video = tmp_path / "tracks.mp4"
     assert render(result, "--images", sequence / "img1", "-o", video, "--fps", "10") == 0
-    import imageio.v2 as imageio
-
-    reader = imageio.get_reader(video, format="FFMPEG")
-    frames = []
-    for image in reader:  # not list(reader): its length is 2**63 - 1
-        frames.append(image)
-    reader.close()
-    frames = np.stack(frames)
+    frames = np.stack(list(iio.imiter(video, plugin="pyav")))
     assert frames.shape == (FRAMES, H, W, 3)
+
+    gif = tmp_path / "tracks.gif"
+    assert render(result, "--images", sequence / "img1", "-o", gif, "--fps", "10") == 0
+    assert iio.imread(gif, index=None).shape[0] == FRAMES
 
     picture = tmp_path / "frame5.png"
     assert render(result, "--images", sequence / "img1", "-o", picture, "--frames", "2:5",
@@ -103,13 +101,11 @@ def test_a_result_file_is_drawn_as_it_is_to_a_video_and_a_picture(sequence, tmp_
 
 
 def test_a_video_can_be_the_source_of_frames(sequence, tmp_path):
-    import imageio.v2 as imageio
-
     video = tmp_path / "in.mp4"
-    with imageio.get_writer(video, format="FFMPEG", fps=10, macro_block_size=2,
-                            ffmpeg_log_level="error") as writer:
+    with iio.imopen(video, "w", plugin="pyav") as writer:
+        writer.init_video_stream("libx264", fps=10)
         for _, path in image_files(sequence / "img1"):
-            writer.append_data(iio.imread(path))
+            writer.write_frame(iio.imread(path))
     det = tmp_path / "det.txt"  # outside a sequence folder: the fps comes from the video
     det.write_text((sequence / "det" / "det.txt").read_text())
     out = tmp_path / "frames"

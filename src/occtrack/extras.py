@@ -2,7 +2,7 @@
 command (the core install is the tracker alone: numpy, scipy, tqdm).
 
     pip install "occtrack[eval]"          TrackEval and motmetrics: occtrack eval, demo, benchmark
-    pip install "occtrack[viz]"           matplotlib, Pillow, imageio: figures, occtrack render
+    pip install "occtrack[viz]"           matplotlib, Pillow, imageio, PyAV: figures, render
     pip install "occtrack[supervision]"   occtrack.integrations.supervision
     pip install "occtrack[peers]"         Roboflow's trackers: the peers in occtrack benchmark
     pip install "occtrack[all]"           all of them
@@ -18,7 +18,7 @@ from occtrack.errors import OcctrackError
 EXTRA_OF = {
     "trackeval": "eval", "motmetrics": "eval", "pandas": "eval", "pycocotools": "eval",
     "tabulate": "eval", "cv2": "eval", "xmltodict": "eval",
-    "matplotlib": "viz", "PIL": "viz", "imageio": "viz", "imageio_ffmpeg": "viz",
+    "matplotlib": "viz", "PIL": "viz", "imageio": "viz", "av": "viz",
     "supervision": "supervision",
     "trackers": "peers",
 }

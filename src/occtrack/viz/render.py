@@ -3,8 +3,8 @@
 Each track gets a colour of its own (by id), its id on a label, and a trail through the bottom
 centres of its last boxes (where a person stands). A track reported without a detection this
 frame (coasting on the filter's estimate) is drawn dashed; one whose miss is put down to
-occlusion is labelled "occluded" too. Frames are read and written with imageio (its ffmpeg
-plugin for video, from imageio-ffmpeg) and drawn with Pillow: the `viz` extra.
+occlusion is labelled "occluded" too. Frames are read and written with imageio (its PyAV
+plugin for video) and drawn with Pillow: the `viz` extra.
 
 Frames and rows are matched by number: frame f of a MOTChallenge file is the f-th frame of a
 video, and in a folder the picture whose name is the number f (MOT's img1/000001.jpg), or the
@@ -99,22 +99,24 @@ def _rgb(image: np.ndarray, where: object) -> np.ndarray:
 
 
 def video_frames(path: str | os.PathLike) -> tuple[Iterator[tuple[int, np.ndarray]], dict]:
-    """(frame number, image) of every frame of a video, and its metadata (fps, size)."""
-    imageio = require("imageio.v2", "reading video")
+    """(frame number, image) of every frame of a video, and its metadata (fps, ...)."""
+    iio = require("imageio.v3", "reading video")
+    require("av", "reading video")
     if not Path(path).is_file():
         raise OcctrackError("no such video file", str(path))
     try:
-        reader = imageio.get_reader(str(path), format="FFMPEG")
-        meta = reader.get_meta_data()
-    except Exception as err:
+        meta = dict(iio.immeta(path, plugin="pyav"))
+    except Exception as err:  # PyAV raises its own kinds for a file it cannot decode
         raise OcctrackError(f"cannot read this video: {err}", str(path)) from None
 
     def frames() -> Iterator[tuple[int, np.ndarray]]:
         try:
-            for k, image in enumerate(reader, start=1):
+            for k, image in enumerate(iio.imiter(path, plugin="pyav"), start=1):
                 yield k, _rgb(np.asarray(image), path)
-        finally:
-            reader.close()
+        except OcctrackError:
+            raise
+        except Exception as err:
+            raise OcctrackError(f"cannot read this video: {err}", str(path)) from None
 
     return frames(), meta
 
@@ -279,7 +281,7 @@ class FolderWriter:
 
 
 class VideoWriter:
-    """Frames into one video file (H.264 MP4 and the like through ffmpeg, GIF through
+    """Frames into one video file (H.264 in MP4 and the like through PyAV, GIF through
     Pillow); the format follows the file's suffix. Give it the temporary name of
     `occtrack.io.atomic.atomic_path`, so that the video appears whole or not at all."""
 
@@ -290,22 +292,29 @@ class VideoWriter:
         self.count = 0
 
     def write(self, frame: int, image: np.ndarray) -> None:
-        if self.writer is None:
-            imageio = require("imageio.v2", "writing video")
-            if self.path.suffix.lower() == ".gif":
-                self.writer = imageio.get_writer(self.path, mode="I",
-                                                 duration=1000.0 / self.fps, loop=0)
-            else:
-                require("imageio_ffmpeg", "writing video")
-                self.writer = imageio.get_writer(self.path, format="FFMPEG", mode="I",
-                                                 fps=self.fps, macro_block_size=2,
-                                                 ffmpeg_log_level="error")
-        h, w = image.shape[:2]
-        self.writer.append_data(image[:h - h % 2, :w - w % 2])  # yuv420p: even sizes
+        iio = require("imageio.v3", "writing video")
+        if self.path.suffix.lower() == ".gif":
+            if self.writer is None:
+                self.writer = iio.imopen(self.path, "w", plugin="pillow")
+                self._gif: list[np.ndarray] = []
+            self._gif.append(image)
+        else:
+            if self.writer is None:
+                require("av", "writing video")
+                self.writer = iio.imopen(self.path, "w", plugin="pyav")
+                codec = "libvpx-vp9" if self.path.suffix.lower() == ".webm" else "libx264"
+                self.writer.init_video_stream(codec, fps=self.fps)
+            h, w = image.shape[:2]
+            self.writer.write_frame(image[:h - h % 2, :w - w % 2])  # yuv420p: even sizes
         self.count += 1
 
     def close(self, ok: bool) -> None:
-        if self.writer is not None:
+        if self.writer is None:
+            return
+        try:
+            if ok and self.path.suffix.lower() == ".gif":
+                self.writer.write(np.stack(self._gif), duration=1000.0 / self.fps, loop=0)
+        finally:
             self.writer.close()
             self.writer = None
 
