@@ -380,3 +380,66 @@ def test_no_files_written_outside_tmp(tmp_path, capsys, monkeypatch):
     before = sorted(os.listdir(tmp_path))
     assert run_cli(capsys, gt, result)[0] == 0
     assert sorted(os.listdir(tmp_path)) == before
+
+
+# --- TrackEval's own output files ------------------------------------------------------------
+
+
+def trackeval_files_directly(folder: Path, gt_text: str, result_text: str,
+                             num_frames: int) -> dict[str, bytes]:
+    """The summary and detailed files TrackEval's Evaluator writes itself (its
+    run_mot_challenge.py metrics: HOTA, CLEAR, Identity, and Count, which it adds)."""
+    import trackeval
+
+    write(folder, "gt/SEQ/gt/gt.txt", gt_text)
+    write(folder, "gt/SEQ/seqinfo.ini", f"[Sequence]\nname=SEQ\nseqLength={num_frames}\n")
+    write(folder, "trackers/T/data/SEQ.txt", result_text)
+    evaluator = trackeval.Evaluator({
+        "PRINT_RESULTS": False, "PRINT_CONFIG": False, "TIME_PROGRESS": False,
+        "OUTPUT_SUMMARY": True, "OUTPUT_DETAILED": True, "PLOT_CURVES": False,
+        "LOG_ON_ERROR": None})
+    dataset = trackeval.datasets.MotChallenge2DBox({
+        "GT_FOLDER": str(folder / "gt"), "TRACKERS_FOLDER": str(folder / "trackers"),
+        "OUTPUT_FOLDER": str(folder / "out"), "SEQ_INFO": {"SEQ": None},
+        "SKIP_SPLIT_FOL": True, "TRACKERS_TO_EVAL": ["T"], "PRINT_CONFIG": False})
+    metrics = [trackeval.metrics.HOTA(), trackeval.metrics.CLEAR({"PRINT_CONFIG": False}),
+               trackeval.metrics.Identity({"PRINT_CONFIG": False})]
+    with contextlib.redirect_stdout(io.StringIO()):
+        evaluator.evaluate([dataset], metrics)
+    out = folder / "out" / "T"
+    return {name: (out / name).read_bytes()
+            for name in ("pedestrian_summary.txt", "pedestrian_detailed.csv")}
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_out_dir_files_equal_trackevals_own(tmp_path, capsys, seed):
+    gt_text, result_text = random_sequence(np.random.default_rng(seed))
+    expected = trackeval_files_directly(tmp_path / "te", gt_text, result_text, 40)
+    gt = write(tmp_path, "ours/SEQ/gt/gt.txt", gt_text)
+    write(tmp_path, "ours/SEQ/seqinfo.ini", "[Sequence]\nname=SEQ\nimDir=img1\nframeRate=30\n"
+          "seqLength=40\nimWidth=640\nimHeight=480\nimExt=.jpg\n")
+    result = write(tmp_path, "result.txt", result_text)
+    out = tmp_path / "scores"
+    code, text, err = run_cli(capsys, gt, result, "--out-dir", out)
+    assert code == 0 and err == "" and "pedestrian_summary.txt" in text
+    for name, content in expected.items():
+        assert (out / name).read_bytes() == content
+    header, values = expected["pedestrian_summary.txt"].decode().split("\r\n")[:2]
+    for field in ("HOTA", "DetA", "AssA", "LocA", "IDF1", "IDP", "IDR", "Frag", "MOTA"):
+        assert field in header.split(" ")
+    # the files exist now: replaced only with --force; '-' prints the summary alone
+    assert run_cli(capsys, gt, result, "--out-dir", out)[0] == 1
+    assert run_cli(capsys, gt, result, "--out-dir", out, "--force")[0] == 0
+    code, text, err = run_cli(capsys, gt, result, "--out-dir", "-")
+    assert code == 0 and text.encode() == expected["pedestrian_summary.txt"]
+
+
+def test_out_dir_needs_mot17_and_a_folder(tmp_path, capsys):
+    gt = write(tmp_path, "gt.txt", GT)
+    result = write(tmp_path, "result.txt", RESULT)
+    code, _, err = run_cli(capsys, gt, result, "--protocol", "paper", "--out-dir", tmp_path)
+    assert code == 1 and "mot17" in err
+    code, _, err = run_cli(capsys, gt, result, "--out-dir", result)
+    assert code == 1 and "folder" in err
+    code, _, err = run_cli(capsys, gt, result, "--out-dir", "-", "--json")
+    assert code == 1 and "standard output" in err

@@ -317,5 +317,5 @@ def test_run_streams_frames_and_refuses_a_path():
     tracker.step = counting_step
     result = tracker.run(frames())
     assert result.frames == 12 and read_when_stepped == list(range(1, 13))
-    with pytest.raises(TypeError, match="read_mot"):
+    with pytest.raises(ValueError, match="read_detections"):
         Tracker().run("det.txt")

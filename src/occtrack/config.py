@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from occtrack._compat import tomllib
 from occtrack.errors import OcctrackError
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")

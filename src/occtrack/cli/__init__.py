@@ -33,6 +33,7 @@ COMMANDS = (
     "eval",
     "foursquare",
     "lidar",
+    "render",
     "reproduce",
     "simulate",
     "simulate_detections",
@@ -115,6 +116,12 @@ def explain(err: BaseException, config: str | None = None) -> str:
     the run was given, if any, the likely culprit of running out of memory."""
     if isinstance(err, OcctrackError):
         return str(err)
+    if isinstance(err, ImportError):
+        from occtrack.extras import explain_missing
+
+        missing = explain_missing(err, "this command")
+        if missing is not None:
+            return missing
     if isinstance(err, OSError):
         return _os_message(err)
     if isinstance(err, UnicodeDecodeError):

@@ -38,9 +38,17 @@ Protocols:
 fractions in [0, 1] (not percent), counts as integers, null where undefined (hota under
 paper).
 
+--out-dir DIR (mot17) also writes the files TrackEval itself writes, made by its own writers:
+DIR/pedestrian_summary.txt (one header line and one line of values, space separated: HOTA,
+DetA, AssA, DetRe, DetPr, AssRe, AssPr, LocA, ..., MOTA, MOTP, ..., Frag, IDF1, IDR, IDP, ...,
+in percent as TrackEval gives them) and DIR/pedestrian_detailed.csv (every field, HOTA's at
+each of its 19 thresholds too, a row for the sequence and one for COMBINED), for tools that
+read TrackEval's output. --out-dir - prints the summary file instead of the table.
+
 examples:
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt
-  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --protocol paper --json"""
+  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --protocol paper --json
+  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --out-dir scores/"""
 
 LABELS = {
     "mota": "MOTA", "motp": "MOTP", "idf1": "IDF1", "hota": "HOTA",
@@ -95,6 +103,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              f"{DAY_AT_30_FPS}, a day at 30 fps)")
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object instead of the table")
+    parser.add_argument("--out-dir", metavar="DIR",
+                        help="also write TrackEval's pedestrian_summary.txt and "
+                             "pedestrian_detailed.csv here (mot17; '-': print the summary)")
+    parser.add_argument("--force", action="store_true",
+                        help="replace the files in --out-dir if they exist")
 
 
 def _num_frames(args: argparse.Namespace) -> int | None:
@@ -118,12 +131,55 @@ def _format(key: str, value) -> str:
     return f"{value:.4f}"
 
 
+def _out_files(args: argparse.Namespace) -> dict[str, object] | None:
+    """Where --out-dir's files go ({name: path}), checked before any scoring; None without
+    --out-dir, {} for '-'."""
+    if args.out_dir is None:
+        return None
+    if args.protocol != "mot17":
+        raise OcctrackError("--out-dir writes TrackEval's files, which only the mot17 protocol "
+                            "makes; use --protocol mot17 (or --json)")
+    if args.out_dir == "-":
+        if args.json:
+            raise OcctrackError("--out-dir - and --json both print to standard output; give "
+                                "--out-dir a folder")
+        return {}
+    from pathlib import Path
+
+    from occtrack.io.atomic import check_output
+    from occtrack.metrics.trackeval_mot17 import DETAILED_FILE, SUMMARY_FILE
+
+    folder = Path(args.out_dir)
+    if folder.exists() and not folder.is_dir():
+        raise OcctrackError("is a file; --out-dir takes a folder", str(folder))
+    if not folder.resolve().parent.is_dir():
+        raise OcctrackError("folder does not exist", str(folder.parent))
+    paths = {}
+    for name in (SUMMARY_FILE, DETAILED_FILE):
+        paths[name] = folder / name
+        if folder.is_dir():
+            check_output(paths[name], args.force, (args.gt, args.result))
+    return paths
+
+
+def _sequence_name(args: argparse.Namespace) -> str:
+    from pathlib import Path
+
+    from occtrack.io.mot import find_seqinfo, read_seqinfo
+
+    folder = find_seqinfo(args.gt)
+    if folder is not None:
+        return str(read_seqinfo(folder)["name"])
+    return Path(args.result).stem
+
+
 def run(args: argparse.Namespace) -> int:
     from occtrack.io.mot import read_mot
     from occtrack.metrics import protocols
     from occtrack.metrics.evaluate import evaluate_frames
 
     start = time.perf_counter()
+    out_files = _out_files(args)
     num_frames = _num_frames(args)
     gap = args.max_gap_frames if num_frames is None else None
     gt = read_mot(args.gt, "gt", max_gap_frames=gap)
@@ -133,9 +189,25 @@ def run(args: argparse.Namespace) -> int:
         print(f"occtrack eval: note: {left_out} of {len(result)} result rows name a class other "
               f"than pedestrian (column 8) and are not scored", file=sys.stderr)
     frames = protocols.scored_frames(gt, result, args.protocol, num_frames)
-    values = evaluate_frames(frames, gt, result)
+    trackeval_results = None
+    if out_files is not None:
+        from occtrack.metrics.trackeval_mot17 import SUMMARY_FILE, output_files, sequence_results
+
+        trackeval_results = sequence_results(frames.trackeval)
+        texts = output_files({_sequence_name(args): trackeval_results})
+    values = evaluate_frames(frames, gt, result, trackeval_results)
     seconds = time.perf_counter() - start
 
+    if out_files == {}:
+        sys.stdout.write(texts[SUMMARY_FILE])
+        return 0
+    if out_files:
+        from occtrack.io.atomic import atomic_write
+
+        next(iter(out_files.values())).parent.mkdir(exist_ok=True)
+        for name, path in out_files.items():
+            with atomic_write(path, args.force) as fh:
+                fh.write(texts[name])
     if args.json:
         print(json.dumps(values))
         return 0
@@ -148,4 +220,6 @@ def run(args: argparse.Namespace) -> int:
     print()
     print(f"scored {frames.num_frames} frames, {frames.num_truth} true boxes, "
           f"{frames.num_estimates} result boxes, {seconds:.2f} s")
+    if out_files:
+        print(f"TrackEval's files: {', '.join(str(p) for p in out_files.values())}")
     return 0

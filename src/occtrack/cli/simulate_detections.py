@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-import tomllib
 from pathlib import Path
 
+from occtrack._compat import tomllib
 from occtrack.cli.arguments import seed_int
 from occtrack.errors import OcctrackError
 

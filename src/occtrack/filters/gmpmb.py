@@ -67,17 +67,13 @@ class GaussianMixturePMB:
         c = config
         self.config = c
         self.occlusion = occlusion
-        self.dt = c.dt
-        self.motion = ConstantVelocity(c.dt, c.position_noise, c.velocity_noise, c.size_noise,
-                                       c.velocity_time)
-        self.coast_motion = ConstantVelocity(c.dt, c.position_noise, c.velocity_noise,
-                                             c.size_noise, c.coast_velocity_time)
+        self._dt_models: dict[float, tuple] = {}
+        self._use_dt(c.dt)
         self.measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
         self.image_size = np.asarray(c.image_size, dtype=float)
-        self.survival_inside = float(np.exp(-c.death_rate * c.dt))
         cap, L = c.capacity, c.max_labels
         self.n = 0
         self.mass = np.zeros(cap)
@@ -95,6 +91,12 @@ class GaussianMixturePMB:
         self.slot_coast = np.zeros(L)
         self.slot_detection = np.full(L, -1, dtype=np.int64)
         self.slot_serial = np.full(L, -1, dtype=np.int64)  # unique per Bernoulli ever labelled
+        # the class of each Bernoulli (that of the detection it was born from; it never takes
+        # a detection of another class), and the probability that its last miss, if it was
+        # missed, was occlusion's doing: d o (1 - v + v q) / miss, mass-weighted over its
+        # components (0 under no occlusion)
+        self.slot_class = np.zeros(L, dtype=np.int64)
+        self.slot_hidden = np.zeros(L)
         self._next_serial = 0
         self.steps = 0
         self.iterations = 0  # loopy BP iterations of the last step
@@ -138,18 +140,39 @@ class GaussianMixturePMB:
         return self.slot_used & (self.slot_hits >= self.config.confirm_hits)
 
     def step(self, z: np.ndarray, scores: np.ndarray,
-             camera: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+             camera: tuple[np.ndarray, np.ndarray] | None = None, dt: float | None = None,
+             classes: np.ndarray | None = None) -> None:
         """Move with the camera, predict to this frame, add births, update with its
         detections z (M, 2, 2). `camera` is (scale (2,), shift (2,)): the image point x of
-        the last frame is at scale * x + shift in this one."""
+        the last frame is at scale * x + shift in this one. `dt` is the time since the last
+        step in seconds (default `config.dt`); `classes` (M,) the detections' classes: an
+        object takes only detections of its own class (None: one class)."""
+        self._use_dt(self.config.dt if dt is None else float(dt))
         observed = self.measurement.observed(z)
         self._learn_sizes(z, observed)
         if camera is not None:
             self.move_image(*camera)
         self._predict()
         self._add_births()
-        self._update(z, observed, scores)
+        self._update(z, observed, scores, classes)
         self.steps += 1
+
+    def _use_dt(self, dt: float) -> None:
+        """Motion models and survival for a step of dt seconds (cached per dt: a steady frame
+        rate builds them once; the Markov features take dt at each prediction)."""
+        models = self._dt_models.get(dt)
+        if models is None:
+            c = self.config
+            if len(self._dt_models) >= 64:  # jittery timestamps: keep the cache bounded
+                self._dt_models.clear()
+            models = (ConstantVelocity(dt, c.position_noise, c.velocity_noise, c.size_noise,
+                                       c.velocity_time),
+                      ConstantVelocity(dt, c.position_noise, c.velocity_noise, c.size_noise,
+                                       c.coast_velocity_time),
+                      float(np.exp(-c.death_rate * dt)))
+            self._dt_models[dt] = models
+        self.dt = dt
+        self.motion, self.coast_motion, self.survival_inside = models
 
     # -- prediction -----------------------------------------------------------------------
 
@@ -221,7 +244,8 @@ class GaussianMixturePMB:
 
     # -- update ---------------------------------------------------------------------------
 
-    def _update(self, z: np.ndarray, observed: np.ndarray, scores: np.ndarray) -> None:
+    def _update(self, z: np.ndarray, observed: np.ndarray, scores: np.ndarray,
+                classes: np.ndarray | None = None) -> None:
         c = self.config
         self._sort_by_label()
         n, M = self.n, len(z)
@@ -263,6 +287,9 @@ class GaussianMixturePMB:
             # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
             # which are slow to compute with, out of the arrays
             np.exp(log_hit, out=hit, where=log_hit > LOG_FLOOR)
+            if classes is not None:  # an object never takes a detection of another class
+                other = self.slot_class[np.maximum(label, 0)][:, None] != classes[None, :]
+                hit[(label >= 0)[:, None] & other] = 0.0
 
         # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
         # sorted by label, so each object's sums are sums over one contiguous run
@@ -279,6 +306,11 @@ class GaussianMixturePMB:
             L_hit[rows[starts]] = np.add.reduceat(hit, starts, axis=0)
             r_obj[rows[starts]] = np.add.reduceat(mass, starts)
             miss_mass[rows[starts]] = np.add.reduceat(mass * miss, starts)
+            hidden_mass = np.add.reduceat(mass * det * occ * (1.0 - v + v * q), starts)
+            self.slot_hidden[:] = 0.0
+            inside = rows[starts] < A
+            self.slot_hidden[slots[rows[starts][inside]]] = hidden_mass[inside] / np.maximum(
+                miss_mass[rows[starts][inside]], 1e-300)
         r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
         W, H = self.image_size
         size = np.maximum((z[:, :, 1] - z[:, :, 0]).prod(axis=1), 1.0)
@@ -328,7 +360,7 @@ class GaussianMixturePMB:
                 new_mean[h], new_cov[h], z[j[h]], observed[j[h]])
 
         newborn = np.where(is_hit & (new_label < 0), j, -1)
-        new_label = self._assign_labels(new_mass, new_label, newborn, M)
+        new_label = self._assign_labels(new_mass, new_label, newborn, M, classes)
         new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label = self._merge(
             new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label)
         alive = self._confirm_or_delete(new_label)
@@ -415,7 +447,7 @@ class GaussianMixturePMB:
         return keep
 
     def _assign_labels(self, mass: np.ndarray, label: np.ndarray, newborn: np.ndarray,
-                       M: int) -> np.ndarray:
+                       M: int, classes: np.ndarray | None = None) -> np.ndarray:
         """Keep the `max_labels` strongest Bernoullis (existing and new) above the label
         threshold; recycle the others into the Poisson part."""
         L = len(self.slot_used)
@@ -452,6 +484,7 @@ class GaussianMixturePMB:
             self.slot_hits[free] = 1
             self.slot_coast[free] = 0.0
             self.slot_detection[free] = new[keep_new]
+            self.slot_class[free] = 0 if classes is None else classes[new[keep_new]]
         return label
 
     def _merge(self, mass, mean, cov, det, occ, coast, label):

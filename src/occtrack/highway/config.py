@@ -12,12 +12,12 @@ sensor sees by angle, so a car's shape as seen is [left, right] / distance.
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
 
+from occtrack._compat import tomllib
 from occtrack.errors import OcctrackError
 
 SENSOR_MODES = ("object-wise", "measurement-wise")

@@ -15,6 +15,7 @@ from occtrack.metrics.clear import clear_mot
 from occtrack.metrics.gospa import gospa_from_distances
 from occtrack.metrics.protocols import GOSPA_C, GOSPA_P, KEYS, ScoredFrames, scored_frames
 from occtrack.metrics.trackeval_mot17 import scores as trackeval_scores
+from occtrack.metrics.trackeval_mot17 import summary as trackeval_summary
 
 __all__ = ["KEYS", "evaluate", "evaluate_frames", "frame_gospa", "gospa_per_frame"]
 
@@ -44,11 +45,14 @@ def frame_gospa(frames: ScoredFrames) -> np.ndarray:
                      for iou in frames.iou], dtype=float)
 
 
-def evaluate_frames(frames: ScoredFrames, gt: MotTable, result: MotTable) -> dict:
+def evaluate_frames(frames: ScoredFrames, gt: MotTable, result: MotTable,
+                    trackeval_results: dict | None = None) -> dict:
     """`evaluate` on frames already scored by `scored_frames(gt, result, ...)`, so that a plot
-    of `frame_gospa(frames)` and the table share one preprocessing."""
+    of `frame_gospa(frames)` and the table share one preprocessing. `trackeval_results`, if
+    given, are TrackEval's `sequence_results(frames.trackeval)`, already computed."""
     if frames.protocol == "mot17":
-        values = trackeval_scores(frames.trackeval)
+        values = (trackeval_scores(frames.trackeval) if trackeval_results is None
+                  else trackeval_summary(trackeval_results))
     else:
         objects = [result.id[r] for r in frames.estimate_rows]
         hypotheses = [gt.id[r] for r in frames.truth_rows]

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 from trackeval.datasets import MotChallenge2DBox
-from trackeval.metrics import CLEAR, HOTA, Identity
-from trackeval.utils import TrackEvalException
+from trackeval.metrics import CLEAR, HOTA, Count, Identity
+from trackeval.utils import TrackEvalException, write_detailed_results, write_summary_results
 
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
@@ -109,7 +109,39 @@ def scores(data: dict) -> dict:
 
 
 def _metrics() -> dict:
-    return {"CLEAR": CLEAR(dict(_QUIET)), "Identity": Identity(dict(_QUIET)), "HOTA": HOTA()}
+    """TrackEval's metrics in the order its run_mot_challenge.py runs them (Count is always
+    run, and gives the Dets, GT_Dets, IDs and GT_IDs columns of its files)."""
+    return {"HOTA": HOTA(), "CLEAR": CLEAR(dict(_QUIET)), "Identity": Identity(dict(_QUIET)),
+            "Count": Count()}
+
+
+CLASS = "pedestrian"
+SUMMARY_FILE = f"{CLASS}_summary.txt"
+DETAILED_FILE = f"{CLASS}_detailed.csv"
+
+
+def output_files(per_sequence: dict[str, dict]) -> dict[str, str]:
+    """The files TrackEval writes for one tracker (`pedestrian_summary.txt`: every summary
+    field of COMBINED_SEQ, space separated, HOTA DetA AssA ... LocA ... IDF1 IDR IDP ... Frag;
+    `pedestrian_detailed.csv`: every field, each HOTA field at each of its 19 thresholds too,
+    a row per sequence and COMBINED), made by TrackEval's own writers from
+    `sequence_results` keyed by sequence name. Returns {file name: text}."""
+    combined = combined_results(list(per_sequence.values()))
+    summaries, details = [], []
+    with _trackeval_errors():
+        for name, metric in _metrics().items():
+            table = {seq: res[name] for seq, res in per_sequence.items()}
+            table["COMBINED_SEQ"] = combined[name]
+            summaries.append(metric.summary_results(table))
+            details.append(metric.detailed_results(table))
+    with tempfile.TemporaryDirectory(prefix="occtrack-trackeval-") as folder:
+        write_summary_results(summaries, CLASS, folder)
+        write_detailed_results(details, CLASS, folder)
+        texts = {}
+        for name in (SUMMARY_FILE, DETAILED_FILE):
+            with open(Path(folder) / name, encoding="utf-8", newline="") as fh:
+                texts[name] = fh.read()  # as written: csv's \r\n line ends kept
+        return texts
 
 
 def sequence_results(data: dict) -> dict:

@@ -1,22 +1,32 @@
-"""The box tracker's Python API: `Tracker(config).step(detections) -> Tracks`, and `run`.
+"""The box tracker's Python API: `Tracker(config).update(...) -> Tracks`, `step` and `run`.
 
-    from occtrack.tracker import Tracker, TrackerConfig
-    tracker = Tracker(TrackerConfig(occlusion="measurement-wise", image_size=(1920, 1080)))
-    for boxes, scores in frames:             # boxes (M, 4) left, top, width, height
-        tracks = tracker.step(boxes, scores)  # tracks.ids, tracks.boxes, tracks.existence
+    from occtrack import Tracker, TrackerConfig
 
-Each `step` is one tracked frame, dt = frame_step / fps seconds after the previous one. Track
-ids are given when an object is first reported (existence above `report_existence`) and stay
-with it for as long as it keeps its label; an id is never reused.
+    tracker = Tracker(TrackerConfig(image_size=(1920, 1080), fps=30))
+    for t, (boxes, scores, classes) in enumerate(detector_output):   # boxes (M, 4) x1 y1 x2 y2
+        tracks = tracker.update(boxes, scores, classes, timestamp=t / 30)
+        tracks.ids, tracks.boxes, tracks.classes, tracks.detection_index, tracks.occluded
+
+`update` takes boxes in any of the usual formats ("xyxy", "ltwh", "cxcywh") and returns them in
+the same one; each call is one frame, `timestamp` seconds into the video (the time step is the
+difference, so dropped and irregular frames are predicted over their true interval; without
+timestamps, frames are 1 / fps apart). `step` is the same in left, top, width, height with the
+time step given directly (`dt`), and `run` tracks a whole sequence.
+
+Track ids are given when an object is first reported (existence above `report_existence`) and
+stay with it for as long as it keeps its label; an id is never reused. An object has one class
+for life, that of the detection it was born from, and takes only detections of that class.
 """
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from occtrack.config import TrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
@@ -26,32 +36,76 @@ from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.occlusion.boxes import box_occlusion
 from occtrack.progress import progress
+from occtrack.tracker.boxes import (
+    BoxFormat,
+    check_classes,
+    check_format,
+    check_scores,
+    check_time,
+    from_ltwh,
+    to_ltwh,
+)
 from occtrack.tracker.camera import estimate_shift
+
+OCCLUDED_ABOVE = 0.5
+"""A missed object is reported as occluded when the probability that occlusion caused its miss
+is above this."""
 
 
 @dataclass(frozen=True)
 class Tracks:
-    """The objects reported at one frame: ids (n,), boxes (n, 4) left, top, width, height,
-    existence (n,), velocities (n, 2) of the box centres in px / s, and detection_index (n,):
-    the detection each object took this frame (its box is then that detection's, as a
-    detector-driven tracker reports it), -1 for an object reported without one (coasting:
-    the filter's estimate)."""
+    """The objects reported at one frame, n of them, sorted by id.
+
+    Attributes:
+        ids: (n,) int track ids, unique, never reused.
+        boxes: (n, 4) float boxes in `box_format`: the detection's own box for an object that
+            took one this frame, the filter's estimate for one that did not.
+        existence: (n,) probability that each object exists.
+        velocities: (n, 2) velocity of each box centre, px / s.
+        detection_index: (n,) int, the index of the detection each object took this frame
+            (into the boxes given to `update` / `step`), -1 for an object reported without one
+            (coasting on the filter's estimate).
+        classes: (n,) int class of each object (0 when no classes were given), fixed for life.
+        occluded: (n,) bool, True for an object reported without a detection whose miss is
+            more likely occlusion's doing than not (never under `occlusion = "none"`).
+        box_format: "ltwh" (left, top, width, height), "xyxy" or "cxcywh".
+    """
 
     ids: np.ndarray
     boxes: np.ndarray
     existence: np.ndarray
     velocities: np.ndarray
     detection_index: np.ndarray
+    classes: np.ndarray
+    occluded: np.ndarray
+    box_format: str = "ltwh"
 
     def __len__(self) -> int:
         return len(self.ids)
 
+    @property
+    def coasting(self) -> np.ndarray:
+        """(n,) bool: reported without a detection this frame."""
+        return self.detection_index < 0
+
     def moved(self, seconds: float) -> Tracks:
         """The same tracks with boxes carried `seconds` further along their velocities (for
         frames that are not tracked: no detection taken)."""
-        shift = np.concatenate([self.velocities * seconds, np.zeros((len(self), 2))], axis=1)
+        step = self.velocities * seconds
+        zeros = np.zeros((len(self), 2))
+        shift = np.concatenate([step, step if self.box_format == "xyxy" else zeros], axis=1)
         return Tracks(self.ids, self.boxes + shift, self.existence, self.velocities,
-                      np.full(len(self), -1, dtype=np.int64))
+                      np.full(len(self), -1, dtype=np.int64), self.classes, self.occluded,
+                      self.box_format)
+
+    def in_format(self, box_format: BoxFormat) -> Tracks:
+        """The same tracks with boxes in another format."""
+        check_format(box_format)
+        if box_format == self.box_format:
+            return self
+        ltwh = to_ltwh(self.boxes, self.box_format)
+        return Tracks(self.ids, from_ltwh(ltwh, box_format), self.existence, self.velocities,
+                      self.detection_index, self.classes, self.occluded, box_format)
 
 
 @dataclass(frozen=True)
@@ -64,6 +118,8 @@ class TrackResult:
     existence: np.ndarray
     frames: int
     seconds_tracking: float = 0.0
+    coasting: np.ndarray | None = None  # (N,) bool: reported without a detection
+    occluded: np.ndarray | None = None  # (N,) bool: ... and its miss put down to occlusion
 
     @property
     def num_tracks(self) -> int:
@@ -71,45 +127,109 @@ class TrackResult:
 
 
 class Tracker:
-    """Gaussian-mixture PMB box tracker; occlusion model from `config.occlusion` unless one
-    is passed (any object with `terms(ctx) -> OcclusionTerms`)."""
+    """Gaussian-mixture PMB box tracker.
+
+    Args:
+        config: every setting (`TrackerConfig`); the image size and frame rate matter most:
+            births come in at the image's edges and the time step without timestamps is
+            1 / fps. Defaults: `TrackerConfig()` (1920 x 1080 at 30 fps).
+        occlusion: an occlusion model (any object with `terms(ctx) -> OcclusionTerms`, see
+            `occtrack.occlusion.base`); by default the one `config.occlusion` names.
+    """
 
     def __init__(self, config: TrackerConfig | None = None,
                  occlusion: OcclusionModel | None = None):
+        if config is not None and not isinstance(config, TrackerConfig):
+            raise ValueError(f"config must be a TrackerConfig, not {type(config).__name__}")
         self.config = config or TrackerConfig()
         c = self.config
         if occlusion is None:
             geometry = BoxOcclusionGeometry(c.occlusion_gain, *c.occlusion_ramp)
             occlusion = box_occlusion(c.occlusion, geometry, c.occluder_min_existence)
         self.occlusion = occlusion
-        self.filter = GaussianMixturePMB(c, occlusion)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every object and start again (ids start again at 1)."""
+        c = self.config
+        self.filter = GaussianMixturePMB(c, self.occlusion)
         L = c.max_labels
         self._reported_serial = np.full(L, -1, dtype=np.int64)
         self._report_id = np.zeros(L, dtype=np.int64)
         self._next_id = 1
         self._boxes = np.zeros((0, 4))
-        self._previous = None
+        self._previous: np.ndarray | None = None
+        self._timestamp: float | None = None
 
-    def step(self, boxes: np.ndarray, scores: np.ndarray | None = None,
-             camera_motion: np.ndarray | None = None) -> Tracks:
+    def update(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
+               classes: npt.ArrayLike | None = None, timestamp: float | None = None,
+               box_format: BoxFormat = "xyxy",
+               camera_motion: npt.ArrayLike | None = None) -> Tracks:
+        """Track one frame's detections and return the objects reported now.
+
+        Args:
+            boxes: (M, 4) detections in pixels, in `box_format`: "xyxy" (x1, y1, x2, y2, the
+                default, as YOLO and supervision give them), "ltwh" (left, top, width,
+                height) or "cxcywh" (centre x, centre y, width, height).
+            scores: (M,) detector confidences in [0, 1]; None: all 1.
+            classes: (M,) class ids; an object keeps the class it was born with and takes
+                only detections of that class. None: one class (reported as 0).
+            timestamp: when the frame was taken, in seconds (any origin, increasing). The
+                time step is the difference from the previous call's, so irregular and
+                dropped frames are predicted over their true interval. None: 1 / fps (times
+                `frame_step`) after the previous frame.
+            box_format: the format of `boxes`, and of the boxes returned.
+            camera_motion: a 2 x 3 affine matrix from the previous frame's image to this
+                one's (see `step`); None: estimated from the detections, as configured.
+
+        Returns:
+            `Tracks`: ids, boxes (in `box_format`), existence, velocities, classes,
+            detection_index (into `boxes`; -1: none taken) and occluded, sorted by id.
+
+        Raises:
+            ValueError: a bad box format, shape or value, scores or classes that do not
+                match the boxes, or a timestamp that does not increase.
+        """
+        check_format(box_format)
+        ltwh = to_ltwh(boxes, box_format)
+        dt = None
+        if timestamp is not None:
+            now = check_time(timestamp, "timestamp")
+            if self._timestamp is not None:
+                dt = now - self._timestamp
+                if dt <= 0:
+                    raise ValueError(f"timestamp {now} does not follow the previous frame's "
+                                     f"{self._timestamp}; timestamps must increase")
+        tracks = self.step(ltwh, scores, camera_motion, classes=classes, dt=dt)
+        if timestamp is not None:
+            self._timestamp = now
+        elif self._timestamp is not None:
+            self._timestamp += self.filter.dt
+        out = tracks.in_format(box_format)
+        detected = out.detection_index >= 0
+        if detected.any():  # the caller's own boxes, not a round trip through ltwh
+            original = np.asarray(boxes, dtype=float).reshape(-1, 4)
+            out.boxes[detected] = original[out.detection_index[detected]]
+        return out
+
+    def step(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
+             camera_motion: npt.ArrayLike | None = None, *,
+             classes: npt.ArrayLike | None = None, dt: float | None = None) -> Tracks:
         """Track one frame's detections: boxes (M, 4) left, top, width, height in px, scores
-        (M,) detector confidences (1 when None). `camera_motion`, a 2 x 3 affine matrix,
-        maps the previous tracked frame's image points to this one's (its rotation and shear
-        are ignored: the state holds boxes); without it the camera's shift is estimated from
-        the detections (`camera_motion = "detections"`) or taken as none."""
-        boxes = np.asarray(boxes, dtype=float)
-        if boxes.size == 0:
-            boxes = boxes.reshape(0, 4)
-        if boxes.ndim != 2 or boxes.shape[1] != 4:
-            raise ValueError(f"boxes must have shape (M, 4), not {boxes.shape}")
-        if not np.isfinite(boxes).all():
-            raise ValueError("boxes contain NaN or infinity")
-        if (boxes[:, 2:] < 0).any():
-            raise ValueError("boxes have a negative width or height")
-        scores = np.ones(len(boxes)) if scores is None else np.asarray(scores, dtype=float)
-        if scores.shape != (len(boxes),) or not np.isfinite(scores).all():
-            raise ValueError("scores must be M finite numbers, one per box")
-        boxes = boxes.copy()
+        (M,) detector confidences (1 when None), classes (M,) class ids (None: one class),
+        `dt` seconds after the previous step (None: `config.dt`, frame_step / fps).
+        `camera_motion`, a 2 x 3 affine matrix, maps the previous tracked frame's image
+        points to this one's (its rotation and shear are ignored: the state holds boxes);
+        without it the camera's shift is estimated from the detections
+        (`camera_motion = "detections"`) or taken as none. Boxes of the returned tracks are
+        left, top, width, height."""
+        boxes = to_ltwh(boxes, "ltwh")
+        scores = check_scores(scores, len(boxes))
+        labels = check_classes(classes, len(boxes))
+        if dt is not None:
+            dt = check_time(dt, "dt")
+            if dt <= 0:
+                raise ValueError(f"dt must be a positive number of seconds, not {dt}")
         boxes[:, 2:] = np.maximum(boxes[:, 2:], 1.0)
         camera = None
         if camera_motion is not None:
@@ -121,7 +241,7 @@ class Tracker:
             shift = estimate_shift(self._previous, boxes)
             if shift is not None:
                 camera = (np.ones(2), shift)
-        self.filter.step(edges_from_ltwh(boxes), scores, camera)
+        self.filter.step(edges_from_ltwh(boxes), scores, camera, dt=dt, classes=labels)
         self._boxes = boxes
         self._previous = boxes
         return self.tracks()
@@ -130,7 +250,8 @@ class Tracker:
         """The objects reported now, by id: existence above `report_existence`, and either
         detected at this step or unseen for at most `report_coast_time` with the centre known
         to within `report_centre_std` box heights (a coasting estimate drifts, and a box
-        shown where nobody is costs more than one left out)."""
+        shown where nobody is costs more than one left out). Boxes are left, top, width,
+        height."""
         f, c = self.filter, self.config
         r, means, centre_std = f.object_moments()
         took = f.slot_detection
@@ -151,26 +272,33 @@ class Tracker:
         index = took[shown]
         detected = index >= 0
         boxes[detected] = self._boxes[index[detected]]
-        return Tracks(ids[order], boxes, r[shown], means[shown, :, 1].copy(), index)
+        occluded = ~detected & (f.slot_hidden[shown] > OCCLUDED_ABOVE)
+        return Tracks(ids[order], boxes, r[shown], means[shown, :, 1].copy(), index,
+                      f.slot_class[shown].copy(), occluded)
 
-    def run(self, detections: MotTable | Iterable[np.ndarray], num_frames: int | None = None,
+    def run(self, detections: MotTable | Iterable[npt.ArrayLike], num_frames: int | None = None,
             quiet: bool = True, desc: str = "tracking") -> TrackResult:
         """Track a whole sequence, reporting at every frame.
 
-        `detections` is a MotTable (frames 1..num_frames) or one array per frame, (M, 4) boxes
+        `detections` is a MotTable (frames 1..num_frames; `occtrack.io.mot.read_detections`
+        reads one from a file) or one array per frame, (M, 4) boxes left, top, width, height
         or (M, 5) boxes and scores. Every `frame_step`-th frame is tracked, starting with the
         first; in between, the last tracks are carried along their velocities. Frames are
         read one at a time, so a long stream is never held in memory (only the result rows)."""
-        if isinstance(detections, str | bytes):
-            raise TypeError("detections must be a MotTable or an iterable of (M, 4) or (M, 5) "
-                            "arrays; read a file with occtrack.io.mot.read_mot first")
+        if isinstance(detections, str | bytes | os.PathLike):
+            raise ValueError(f"Tracker.run takes detections, not a file name ({detections!r}):"
+                             f" read the file first, e.g. occtrack.io.mot.read_detections("
+                             f"path, image_size), or run `occtrack track FILE -o RESULT`")
+        if not isinstance(detections, MotTable | Iterable):
+            raise ValueError(f"Tracker.run takes a MotTable or one (M, 4) or (M, 5) array per "
+                             f"frame, not {type(detections).__name__}")
         total = num_frames
         if total is None and isinstance(detections, MotTable):
             total = detections.num_frames
         elif total is None and hasattr(detections, "__len__"):
             total = len(detections)
         c = self.config
-        rows_frame, rows_id, rows_box, rows_r = [], [], [], []
+        rows: dict[str, list] = {k: [] for k in ("frame", "id", "box", "r", "coast", "occ")}
         tracks = None
         start = time.perf_counter()
         count = 0
@@ -183,16 +311,19 @@ class Tracker:
                 shown = tracks
             else:
                 shown = tracks.moved(offset / c.fps)
-            rows_frame.append(np.full(len(shown), index + 1))
-            rows_id.append(shown.ids)
-            rows_box.append(shown.boxes)
-            rows_r.append(shown.existence)
+            rows["frame"].append(np.full(len(shown), index + 1))
+            rows["id"].append(shown.ids)
+            rows["box"].append(shown.boxes)
+            rows["r"].append(shown.existence)
+            rows["coast"].append(shown.coasting)
+            rows["occ"].append(shown.occluded)
         seconds = time.perf_counter() - start
         if not count:
             return TrackResult(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 4)),
-                               np.zeros(0), 0, seconds)
-        return TrackResult(np.concatenate(rows_frame), np.concatenate(rows_id),
-                           np.concatenate(rows_box), np.concatenate(rows_r), count, seconds)
+                               np.zeros(0), 0, seconds, np.zeros(0, bool), np.zeros(0, bool))
+        return TrackResult(*(np.concatenate(rows[k]) for k in ("frame", "id", "box", "r")),
+                           count, seconds, np.concatenate(rows["coast"]),
+                           np.concatenate(rows["occ"]))
 
 
 def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np.ndarray]]:
@@ -203,7 +334,14 @@ def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np
     for index, frame in enumerate(detections):
         if num_frames is not None and index >= num_frames:
             return
-        arr = np.asarray(frame, dtype=float)
+        if isinstance(frame, str | bytes):
+            raise ValueError(f"frame {index + 1}: detections must be an (M, 4) or (M, 5) "
+                             f"array, not the string {frame[:40]!r}")
+        try:
+            arr = np.asarray(frame, dtype=float)
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"frame {index + 1}: detections must be an (M, 4) or (M, 5) "
+                             f"array of numbers ({err})") from None
         if arr.size == 0:
             arr = arr.reshape(0, 4)
         if arr.ndim != 2 or arr.shape[1] not in (4, 5):

@@ -1,0 +1,188 @@
+"""The public API a detector pipeline calls: `from occtrack import Tracker, TrackerConfig`,
+`Tracker.update` in every box format, timestamps, classes, the detection each track took,
+occlusion flags, and clear errors for bad input."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import occtrack
+from occtrack import Tracker, TrackerConfig, Tracks
+from occtrack.tracker.boxes import from_ltwh, to_ltwh
+
+
+def walkers(frames: int = 40, speed: float = 150.0, fps: float = 30.0) -> list[np.ndarray]:
+    """Two people 300 px apart walking right at `speed` px / s, ltwh."""
+    return [np.array([[300.0 + speed * k / fps, 400.0, 40.0, 120.0],
+                      [900.0 + speed * k / fps, 380.0, 44.0, 130.0]]) for k in range(frames)]
+
+
+def test_import_occtrack_is_light_and_exports_the_api():
+    code = ("import sys, occtrack; heavy = [m for m in ('numpy', 'scipy', 'occtrack.tracker') "
+            "if m in sys.modules]; print(heavy)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
+    assert {"Tracker", "TrackerConfig", "Tracks"} <= set(dir(occtrack))
+    assert occtrack.Tracker is Tracker and isinstance(occtrack.__version__, str)
+    with pytest.raises(AttributeError):
+        occtrack.NoSuchThing  # noqa: B018
+
+
+def test_py_typed_ships_with_the_package():
+    from importlib.resources import files
+
+    assert files("occtrack").joinpath("py.typed").is_file()
+
+
+@pytest.mark.parametrize("box_format", ["xyxy", "ltwh", "cxcywh"])
+def test_update_in_any_box_format_matches_step(box_format):
+    """update in any format tracks exactly as step does in ltwh, returns boxes in the format
+    it was given, and a detected track's box is the caller's own box, bit for bit."""
+    config = TrackerConfig(image_size=(1280, 720), fps=30)
+    by_step, by_update = Tracker(config), Tracker(config)
+    for k, ltwh in enumerate(walkers()):
+        boxes = from_ltwh(ltwh, box_format)
+        a = by_step.step(ltwh, np.full(2, 0.9))
+        b = by_update.update(boxes, np.full(2, 0.9), timestamp=10.0 + k / 30,
+                             box_format=box_format)
+        assert isinstance(b, Tracks) and b.box_format == box_format
+        assert np.array_equal(a.ids, b.ids)
+        assert np.array_equal(a.detection_index, b.detection_index)
+        assert np.allclose(to_ltwh(b.boxes, box_format), a.boxes, atol=1e-9)
+        took = b.detection_index >= 0
+        assert np.array_equal(b.boxes[took], boxes[b.detection_index[took]])
+    assert b.ids.tolist() == [1, 2] and (b.detection_index == [0, 1]).all()
+    assert b.classes.tolist() == [0, 0] and not b.occluded.any()
+
+
+def test_timestamps_give_the_true_time_step_over_dropped_frames():
+    """Frames arrive at 30 fps with two of every three dropped after the first ten: with
+    timestamps the velocity stays 150 px/s; without them each call is taken as 1/30 s and the
+    tracker believes the walkers triple their speed."""
+    config = TrackerConfig(image_size=(1280, 720), fps=30)
+    kept = list(range(10)) + list(range(10, 60, 3))
+    frames = walkers(60)
+    timed, untimed = Tracker(config), Tracker(config)
+    for k in kept:
+        a = timed.update(frames[k], box_format="ltwh", timestamp=k / 30)
+        b = untimed.update(frames[k], box_format="ltwh")
+    assert a.ids.tolist() == [1, 2] and (a.detection_index >= 0).all()
+    assert a.velocities[:, 0] == pytest.approx([150.0, 150.0], rel=0.1)
+    assert (b.velocities[:, 0] > 300.0).all()
+    assert timed.filter.dt == pytest.approx(3 / 30)
+
+
+def test_the_filter_builds_its_motion_for_each_time_step():
+    tracker = Tracker(TrackerConfig(fps=30))
+    tracker.update([[10, 10, 50, 130]], timestamp=0.0)
+    tracker.update([[12, 10, 52, 130]], timestamp=0.25)
+    f = tracker.filter
+    assert f.motion.dt == 0.25 and f.coast_motion.dt == 0.25
+    assert f.survival_inside == pytest.approx(np.exp(-tracker.config.death_rate * 0.25))
+    tracker.update([[14, 10, 54, 130]])  # no timestamp: 1 / fps after the last
+    assert f.dt == pytest.approx(1 / 30) and tracker._timestamp == pytest.approx(0.25 + 1 / 30)
+    with pytest.raises(ValueError, match="increase"):
+        tracker.update([[14, 10, 54, 130]], timestamp=0.2)
+
+
+def test_a_class_never_switches_and_classes_are_kept_apart():
+    """A person (class 0) and a bicycle (class 1) occupy the same box; a car (class 2) later
+    takes the person's place. Each track keeps the class it was born with and only ever takes
+    detections of that class."""
+    tracker = Tracker(TrackerConfig(image_size=(1280, 720), fps=30))
+    box = [500.0, 300.0, 60.0, 160.0]
+    seen: dict[int, set[int]] = {}
+    for k in range(40):
+        classes = [0, 1] if k < 20 else [2, 1]
+        boxes = np.array([box, box]) + [[2.0 * k, 0, 0, 0]]
+        tracks = tracker.update(boxes, [0.9, 0.8], classes, box_format="ltwh")
+        for i, c, j in zip(tracks.ids, tracks.classes, tracks.detection_index, strict=True):
+            seen.setdefault(int(i), set()).add(int(c))
+            if j >= 0:
+                assert classes[j] == c
+    assert all(len(c) == 1 for c in seen.values())
+    assert {c for cs in seen.values() for c in cs} == {0, 1, 2}
+    assert sorted(tracks.classes.tolist()) == [1, 2]
+
+
+@pytest.mark.parametrize("occlusion", ["measurement-wise", "object-wise", "none"])
+def test_a_walker_hidden_behind_another_is_reported_occluded(occlusion):
+    """A person passes behind one standing nearer the camera and is not detected there: the
+    track coasts, flagged occluded by the occlusion models and never without occlusion."""
+    tracker = Tracker(TrackerConfig(occlusion=occlusion, image_size=(1280, 720), fps=30))
+    front = [600.0, 300.0, 60.0, 180.0]
+    flags = []
+    for k in range(45):
+        x = 400.0 + 5 * k
+        hidden = abs(x + 28 - 630) < 40
+        boxes = [front] if hidden else [front, [x, 290.0, 56.0, 170.0]]
+        tracks = tracker.update(boxes, [0.9] * len(boxes), box_format="ltwh", timestamp=k / 30)
+        assert not tracks.occluded[tracks.detection_index >= 0].any()
+        if hidden:
+            flags.extend(tracks.occluded[tracks.coasting].tolist())
+    assert len(flags) >= 5
+    if occlusion == "none":
+        assert not any(flags)
+    else:
+        assert sum(flags) >= 5
+
+
+def test_update_rejects_bad_input_with_clear_messages():
+    tracker = Tracker()
+    cases = [
+        (dict(boxes="det.txt"), "string"),
+        (dict(boxes=[["a", "b", "c", "d"]]), "numbers"),
+        (dict(boxes=np.zeros((3, 5))), r"shape \(M, 4\)"),
+        (dict(boxes=[[1, 2, np.nan, 4]]), "NaN"),
+        (dict(boxes=[[10, 10, 5, 20]]), "x2 < x1"),
+        (dict(boxes=[[10, 10, 5, 20]], box_format="xywh"), "box_format"),
+        (dict(boxes=[[10, 10, 20, 20]], scores=[0.5, 0.6]), "scores"),
+        (dict(boxes=[[10, 10, 20, 20]], classes=[0.5]), "whole numbers"),
+        (dict(boxes=[[10, 10, 20, 20]], classes=[[1]]), "classes"),
+        (dict(boxes=[[10, 10, 20, 20]], timestamp="now"), "timestamp"),
+        (dict(boxes=[[10, 10, 20, 20]], timestamp=float("nan")), "finite"),
+        (dict(boxes=[[10, 10, 20, 20]], timestamp=True), "timestamp"),
+    ]
+    for kwargs, message in cases:
+        with pytest.raises(ValueError, match=message):
+            tracker.update(**kwargs)
+    assert tracker.filter.steps == 0  # nothing was tracked by a refused call
+    assert len(tracker.update(np.zeros((0, 4)))) == 0
+    with pytest.raises(ValueError, match="TrackerConfig"):
+        Tracker({"fps": 30})
+
+
+def test_run_refuses_a_file_name_instead_of_iterating_its_characters(tmp_path):
+    tracker = Tracker()
+    for name in ("det.txt", tmp_path / "det.txt", b"det.txt"):
+        with pytest.raises(ValueError, match="file name"):
+            tracker.run(name)
+    with pytest.raises(ValueError, match="MotTable"):
+        tracker.run(42)
+    with pytest.raises(ValueError, match="frame 2"):
+        tracker.run([np.zeros((0, 4)), "1,2,3,4"])
+
+
+def test_run_reports_coasting_and_occluded_rows():
+    frames = [np.array([[300.0 + 5 * k, 400.0, 40.0, 120.0]]) if k < 20 or k > 24
+              else np.zeros((0, 4)) for k in range(30)]
+    result = Tracker(TrackerConfig(fps=30)).run(frames)
+    assert len(result.coasting) == len(result.frame) == len(result.occluded)
+    gap = (result.frame >= 21) & (result.frame <= 25)
+    assert result.coasting[gap].all() and not result.coasting[result.frame < 21].any()
+
+
+def test_reset_starts_over():
+    tracker = Tracker()
+    for k in range(5):
+        tracks = tracker.update([[100 + k, 100, 140 + k, 220]], timestamp=k / 30)
+    assert tracks.ids.tolist() == [1]
+    tracker.reset()
+    assert tracker.filter.steps == 0
+    tracks = tracker.update([[900, 100, 940, 220]], timestamp=0.0)  # time may start again
+    assert tracks.ids.tolist() == [1] and tracks.boxes.tolist() == [[900, 100, 940, 220]]
