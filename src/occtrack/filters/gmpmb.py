@@ -32,6 +32,25 @@ authors' prototype); with it, it decides between an object seen in front (low o_
 hidden, occludable one that would otherwise claim the detections of the people in front of
 it at no cost.
 
+Occlusion without immortality (issue 9). An undetected object's existence follows
+r' = r m / (1 - r + r m), its odds multiplied by m = sum_k w_k miss_k / r each missed frame,
+with miss_k = 1 - d_k + d_k o_k v_k q_k. m is near 1 only while something explains the miss:
+a detection in front of it (q_k, measurement-wise) or a tracked object in front (v_k,
+object-wise), and an occludability o_k near 1, which the misses themselves teach (o rises by
+Bayes after a miss with q > 0, falls after one with q = 0). With nothing in front, m = 1 - d_k
+and the object is gone in a few frames; when its cover walks away, likewise. Three rules keep
+this honest on real detections:
+- n-of-m confirmation: a Bernoulli is deleted unless it takes a detection (p_hit > 1/2) in
+  `confirm_hits` of its first `confirm_window` tracked frames, and occlusion enters the miss
+  and hit terms of confirmed objects only (o = 0 for the others): a newborn's broad density
+  overlaps the detections around it, and a miss it could blame on them would keep a false
+  track alive;
+- a missed component's velocity relaxes to zero with `coast_velocity_time` (the motion
+  model's Ornstein-Uhlenbeck velocity): people stop and turn behind others;
+- `occtrack.tracker` reports an undetected object only while it has been unseen for at most
+  `report_coast_time` and its centre is known to within `report_centre_std` box heights; it
+  is kept, unreported, for as long as m holds its existence, so its label survives.
+
 Then the heaviest `capacity` children are kept (lighter than `prune_mass` dropped); each
 Bernoulli keeps at most its `max_components_per_object` heaviest, rescaled so that its existence
 is unchanged (only the tail of its density goes); the `max_labels` strongest Bernoullis keep a
