@@ -182,8 +182,13 @@ def test_bad_input_and_outputs_are_named(run, tmp_path, capsys):
     out.write_text("keep me")
     assert main(["report", str(results), "-o", str(out)]) == 1
     assert "exists already" in capsys.readouterr().err and out.read_text() == "keep me"
-    assert main(["report", str(results), "-o", str(out), "--force", "--quiet"]) == 0
-    assert out.read_text().startswith("<!DOCTYPE html>")
+    assert main(["report", str(results), "-o", str(out), "--force", "--show", "deepsort"]) == 1
+    assert "no tracker 'deepsort' in this report" in capsys.readouterr().err
+    assert main(["report", str(results), "-o", str(out), "--force", "--quiet",
+                 "--show", "measurement-wise"]) == 0
+    page = out.read_text()
+    assert page.startswith("<!DOCTYPE html>")
+    assert page.count('<option value="measurement-wise" selected>') == 2
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 

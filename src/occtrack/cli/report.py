@@ -22,7 +22,7 @@ makes the JSON needs the eval extra).
 
 examples:
   occtrack benchmark $OCCTRACK_DATA --json run.json --keep-boxes --quiet
-  occtrack report run.json -o report.html
+  occtrack report run.json -o report.html --show measurement-wise
   occtrack benchmark MOT17-04-FRCNN --trackers none,measurement-wise --json - --keep-boxes \\
       | occtrack report - -o mot17-04.html"""
 
@@ -38,6 +38,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="the HTML page to write (- writes it to standard output)")
     parser.add_argument("--title", metavar="TEXT", help="the page's title (default: "
                         "occtrack benchmark and the sequences' names)")
+    parser.add_argument("--show", metavar="TRACKER", help="the tracker the frame viewers open "
+                        "with (default: the first)")
     parser.add_argument("--force", action="store_true", help="overwrite an existing page")
     parser.add_argument("--quiet", action="store_true", help="no summary line")
 
@@ -51,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.output, args.force, inputs=[args.results])
     report = load_report(args.results)
     source = "standard input" if args.results == "-" else Path(args.results).name
-    page = build_page(report, source=source, title=args.title)
+    page = build_page(report, source=source, title=args.title, show=args.show)
     with atomic_write(args.output, args.force) as fh:
         fh.write(page)
     if not args.quiet:

@@ -294,7 +294,7 @@ def _plots(entry: dict, colors: dict[str, str], seq_index: int) -> str:
                      "boxes scored", frames, card_series, "objects", seq_index))
 
 
-def _viewer(entry: dict, seq_index: int) -> str:
+def _viewer(entry: dict, seq_index: int, show: str | None = None) -> str:
     boxes = entry.get("boxes")
     if not boxes or not boxes.get("trackers"):
         return ('<p class="note">No boxes for this sequence, so no frame viewer: make the '
@@ -302,8 +302,8 @@ def _viewer(entry: dict, seq_index: int) -> str:
     frames = int(entry["frames"])
     w, h = (float(v) for v in entry["image_size"])
     scale = 960.0 / w
-    options = "".join(f'<option value="{_esc(name)}">{_esc(name)}</option>'
-                      for name in boxes["trackers"])
+    options = "".join(f'<option value="{_esc(name)}"{" selected" if name == show else ""}>'
+                      f"{_esc(name)}</option>" for name in boxes["trackers"])
     return f"""<div class="viewer" data-seq="{seq_index}">
 <div class="controls">
 <label>tracker <select class="tracker">{options}</select></label>
@@ -587,12 +587,17 @@ def _anchor(index: int) -> str:
     return f"seq-{index + 1}"
 
 
-def build_page(report: dict, source: str = "", title: str | None = None) -> str:
-    """The HTML page of a benchmark report (the dict `occtrack benchmark --json` writes)."""
+def build_page(report: dict, source: str = "", title: str | None = None,
+               show: str | None = None) -> str:
+    """The HTML page of a benchmark report (the dict `occtrack benchmark --json` writes).
+    `show` is the tracker the frame viewers open with (default: the first)."""
     check_report(report, source or "<report>")
     trackers = list(report["trackers"])
     for entry in report["sequences"].values():
         trackers += [name for name in entry["trackers"] if name not in trackers]
+    if show is not None and show not in trackers:
+        raise OcctrackError(f"no tracker {show!r} in this report; choose from "
+                            + ", ".join(trackers), source or None)
     colors = _colors(trackers)
     sequences = list(report["sequences"].items())
     count = len(sequences)
@@ -626,7 +631,7 @@ def build_page(report: dict, source: str = "", title: str | None = None) -> str:
                  f"<h2>{_esc(_sequence_title(name, entry))}</h2>",
                  _table(entry["trackers"], colors),
                  _plots(entry, colors, i),
-                 _viewer(entry, i),
+                 _viewer(entry, i, show),
                  "</section>"]
     body.append(f'<footer>Made by occtrack {_esc(__version__)} (occtrack report'
                 f'{" " + _esc(source) if source else ""}); one file, no network access.'
