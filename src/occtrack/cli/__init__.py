@@ -34,6 +34,7 @@ COMMANDS = (
     "foursquare",
     "lidar",
     "render",
+    "report",
     "reproduce",
     "simulate",
     "simulate_detections",

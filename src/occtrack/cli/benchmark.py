@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 
@@ -35,10 +34,25 @@ SCORES holds hota, idf1, mota, motp, deta, assa, loca (fractions in [0, 1], MOTA
 negative), mostly_tracked, mostly_lost, fp, fn, id_switches, tracks (counts), seconds and
 frames_per_second of the tracker call.
 
+What `occtrack report` draws is added to each sequence on request, on the boxes the mot17
+protocol scores, lists with one entry a frame (entry t is frame t + 1):
+  --per-frame   "per_frame": {"truth": [true objects],
+                              "trackers": {TRACKER: {"gospa", "missed", "false", "estimates"}}}
+                (GOSPA with c = 1, p = 1, alpha = 2 and 1 - IoU, as occtrack eval sums it; the
+                true objects it misses, the reported boxes it counts false, the reported
+                boxes scored)
+  --keep-boxes  the per-frame lists and "boxes": {"truth": BOXES, "trackers": {TRACKER: BOXES}}
+                BOXES: {"frame": [f], "id": [i], "ltwh": [[left, top, width, height]]}, one
+                entry a box in frame order; a tracker's also "ignored" (indices of the boxes
+                the protocol leaves out: on a distractor, or of another class) and, for
+                occtrack, "state" (0 detected, 1 coasting without a detection, 2 coasting and
+                put down to occlusion). MOT17's three sequences, five trackers: 9 MB.
+
 examples:
   occtrack benchmark $OCCTRACK_DATA
   occtrack benchmark MOT17-04-FRCNN --trackers measurement-wise,bytetrack,botsort
-  occtrack benchmark $OCCTRACK_DATA --json benchmark.json --quiet"""
+  occtrack benchmark $OCCTRACK_DATA --json benchmark.json --quiet
+  occtrack benchmark $OCCTRACK_DATA --json run.json --keep-boxes  # for occtrack report run.json"""
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -51,6 +65,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", metavar="FILE",
                         help="write the scores as JSON to FILE (- prints them instead of the "
                              "tables)")
+    parser.add_argument("--per-frame", action="store_true",
+                        help="with --json: also each frame's GOSPA and counts, for "
+                             "occtrack report's plots")
+    parser.add_argument("--keep-boxes", action="store_true",
+                        help="with --json: also every box of the ground truth and the trackers "
+                             "(and the per-frame counts), for occtrack report's frame viewer")
     parser.add_argument("--force", action="store_true", help="overwrite an existing JSON file")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, note or summary")
 
@@ -64,6 +84,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.json not in (None, "-") and Path(args.json).exists() and not args.force:
         raise OcctrackError("exists already; pass --force to overwrite it", args.json)
+    if (args.per_frame or args.keep_boxes) and args.json is None:
+        option = "--keep-boxes" if args.keep_boxes else "--per-frame"
+        raise OcctrackError(f"{option} keeps data for the JSON file only; add --json FILE")
     if args.trackers is None:
         trackers, note = benchmark.default_trackers()
         if note and not args.quiet:
@@ -72,10 +95,11 @@ def run(args: argparse.Namespace) -> int:
         trackers = benchmark.parse_trackers(args.trackers)
 
     start = time.perf_counter()
-    report = benchmark.benchmark(args.root, trackers, quiet=args.quiet)
+    report = benchmark.benchmark(args.root, trackers, quiet=args.quiet,
+                                 per_frame=args.per_frame, keep_boxes=args.keep_boxes)
     seconds = time.perf_counter() - start
 
-    text = json.dumps(report, indent=2) + "\n"
+    text = benchmark.to_json(report)
     if args.json == "-":
         sys.stdout.write(text)
     else:

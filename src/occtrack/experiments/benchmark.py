@@ -7,10 +7,16 @@ same detection file, and scored by the same code (`mot17` protocol, TrackEval). 
 scores are TrackEval's own COMBINED_SEQ, the way MOTChallenge reports a benchmark; the plain
 mean over sequences is given beside them, because one identity event in one sequence can move
 a combined number.
+
+On request the report also keeps what a page of the run needs (`occtrack report`): per frame,
+each tracker's GOSPA and its counts of missed and false objects, and the counts of true and
+reported objects (`per_frame=True`), and the boxes themselves (`keep_boxes=True`), all on the
+boxes the protocol scores.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 import time
@@ -22,7 +28,8 @@ import numpy as np
 from occtrack import peers
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable, read_mot, read_seqinfo
-from occtrack.metrics.protocols import scored_frames
+from occtrack.metrics.gospa import gospa_from_distances
+from occtrack.metrics.protocols import GOSPA_C, GOSPA_P, ScoredFrames, scored_frames
 from occtrack.metrics.trackeval_mot17 import combined_results, sequence_results, summary
 from occtrack.progress import progress
 from occtrack.tracker import Tracker, TrackerConfig
@@ -39,6 +46,9 @@ COLUMNS = (("hota", "HOTA", ".3f"), ("idf1", "IDF1", ".3f"), ("mota", "MOTA", ".
            ("fp", "FP", "d"), ("fn", "FN", "d"), ("id_switches", "IDSW", "d"),
            ("frames_per_second", "frames/s", ".0f"))
 FRACTIONS = ("hota", "idf1", "mota", "deta", "assa", "loca", "motp")
+# The state of a reported box kept with `keep_boxes` (occtrack's trackers only: a peer reports
+# the detection boxes its tracks took).
+DETECTED, COASTING, OCCLUDED = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -118,20 +128,74 @@ def load_sequence(folder: Path) -> Sequence:
 
 def track(name: str, seq: Sequence) -> MotTable:
     """Run one tracker, occtrack (by occlusion model) or a peer, on a whole sequence."""
+    return track_with_states(name, seq)[0]
+
+
+def track_with_states(name: str, seq: Sequence) -> tuple[MotTable, np.ndarray | None]:
+    """`track`, and for occtrack the state of each result row (DETECTED, COASTING: reported
+    without a detection, OCCLUDED: coasting and its miss put down to occlusion); None for a
+    peer."""
     if name in MODELS:
         config = TrackerConfig.from_dict({"occlusion": name,
                                           "image_size": (seq.width, seq.height),
                                           "fps": seq.fps})
         out = Tracker(config).run(seq.det, seq.length)
         n = len(out.frame)
+        states = np.full(n, DETECTED)
+        if out.coasting is not None:
+            states[out.coasting] = COASTING
+        if out.occluded is not None:
+            states[out.occluded] = OCCLUDED
         return MotTable(out.frame, out.id, out.box, out.existence, np.full(n, -1),
-                        np.full(n, -1.0), "<occtrack>")
-    return peers.track_peer(name, seq.det, seq.length, seq.fps)
+                        np.full(n, -1.0), "<occtrack>"), states
+    return peers.track_peer(name, seq.det, seq.length, seq.fps), None
 
 
-def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False) -> dict:
+def per_frame_counts(frames: ScoredFrames) -> dict:
+    """Per frame (entry t is frame t + 1) of scored frames: GOSPA (c = 1, p = 1, alpha = 2,
+    1 - IoU, as `occtrack.metrics.evaluate.gospa_per_frame`), its missed and false objects, and
+    the number of reported boxes scored."""
+    split = [gospa_from_distances(1.0 - iou, GOSPA_C, GOSPA_P) for iou in frames.iou]
+    return {"gospa": [round(g.total, 6) for g in split],
+            "missed": [g.n_missed for g in split],
+            "false": [g.n_false for g in split],
+            "estimates": [int(len(rows)) for rows in frames.estimate_rows]}
+
+
+def _box_rows(table: MotTable, rows: np.ndarray) -> dict:
+    """Rows of a table in frame order, as JSON lists: frame, id, and left, top, width,
+    height rounded to 0.1 px."""
+    rows = rows[np.argsort(table.frame[rows], kind="stable")]
+    return {"frame": table.frame[rows].astype(int).tolist(),
+            "id": table.id[rows].astype(int).tolist(),
+            "ltwh": np.round(table.box[rows], 1).tolist()}
+
+
+def truth_boxes(frames: ScoredFrames, gt: MotTable) -> dict:
+    """The ground-truth boxes the protocol scores, for a viewer."""
+    return _box_rows(gt, np.concatenate([np.zeros(0, int), *frames.truth_rows]))
+
+
+def result_boxes(frames: ScoredFrames, result: MotTable, states: np.ndarray | None) -> dict:
+    """Every reported box, for a viewer, with `ignored` (indices of the rows the protocol
+    leaves out: matched to a distractor, or of another class) and, for occtrack, each row's
+    `state` (DETECTED, COASTING, OCCLUDED)."""
+    order = np.argsort(result.frame, kind="stable")
+    boxes = _box_rows(result, order)
+    scored = np.zeros(len(result), bool)
+    scored[np.concatenate([np.zeros(0, int), *frames.estimate_rows]).astype(int)] = True
+    boxes["ignored"] = np.flatnonzero(~scored[order]).tolist()
+    if states is not None:
+        boxes["state"] = states[order].astype(int).tolist()
+    return boxes
+
+
+def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
+              per_frame: bool = False, keep_boxes: bool = False) -> dict:
     """Track and score every sequence under `root` with every tracker named; the report that
-    `--json` writes (see `occtrack benchmark --help` for its shape)."""
+    `--json` writes (see `occtrack benchmark --help` for its shape). `per_frame` adds each
+    sequence's "per_frame" counts, `keep_boxes` its "boxes" (and the counts)."""
+    per_frame = per_frame or keep_boxes
     folders = find_sequences(root)
     sequences = [load_sequence(folder) for folder in folders]
     names = [seq.name for seq in sequences]
@@ -145,9 +209,10 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False)
     report: dict = {"protocol": PROTOCOL, "trackers": list(trackers), "sequences": {}}
     for seq, name in progress(jobs, len(jobs), "benchmark", quiet):
         start = time.perf_counter()
-        result = track(name, seq)
+        result, states = track_with_states(name, seq)
         spent = time.perf_counter() - start
-        results = sequence_results(scored_frames(seq.gt, result, PROTOCOL, seq.length).trackeval)
+        scored = scored_frames(seq.gt, result, PROTOCOL, seq.length)
+        results = sequence_results(scored.trackeval)
         raw[name].append(results)
         seconds[name] += spent
         entry = report["sequences"].setdefault(seq.name, {
@@ -156,6 +221,15 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False)
         entry["trackers"][name] = {**summary(results), "tracks": int(len(np.unique(result.id))),
                                    "seconds": spent,
                                    "frames_per_second": seq.length / max(spent, 1e-9)}
+        if per_frame:
+            if "per_frame" not in entry:
+                entry["per_frame"] = {"truth": [int(len(rows)) for rows in scored.truth_rows],
+                                      "trackers": {}}
+            entry["per_frame"]["trackers"][name] = per_frame_counts(scored)
+        if keep_boxes:
+            if "boxes" not in entry:
+                entry["boxes"] = {"truth": truth_boxes(scored, seq.gt), "trackers": {}}
+            entry["boxes"]["trackers"][name] = result_boxes(scored, result, states)
     frames = sum(seq.length for seq in sequences)
     report["combined"] = {"method": COMBINED_METHOD, "trackers": {}}
     report["mean"] = {"method": MEAN_METHOD, "trackers": {}}
@@ -201,6 +275,23 @@ def format_report(report: dict) -> str:
         lines += [_row(tracker, values, mean_columns)
                   for tracker, values in report["mean"]["trackers"].items()]
     return "\n".join(lines)
+
+
+def to_json(report: dict) -> str:
+    """The report as JSON text: objects indented, each list of numbers on one line (a
+    per-frame list or a box is one line, not one line a number)."""
+    def lay(value, depth: int) -> str:
+        if isinstance(value, dict) and value:
+            inner = "  " * (depth + 1)
+            items = ",\n".join(f"{inner}{json.dumps(key)}: {lay(item, depth + 1)}"
+                               for key, item in value.items())
+            return "{\n" + items + "\n" + "  " * depth + "}"
+        if isinstance(value, list) and any(isinstance(item, dict) for item in value):
+            inner = "  " * (depth + 1)
+            items = ",\n".join(inner + lay(item, depth + 1) for item in value)
+            return "[\n" + items + "\n" + "  " * depth + "]"
+        return json.dumps(value, separators=(",", ":"))
+    return lay(report, 0) + "\n"
 
 
 def write_atomic(path: str | os.PathLike, text: str) -> None:
