@@ -32,13 +32,23 @@ authors' prototype); with it, it decides between an object seen in front (low o_
 hidden, occludable one that would otherwise claim the detections of the people in front of
 it at no cost.
 
-Then the heaviest `capacity` children are kept (lighter than `prune_mass` dropped); each
-Bernoulli keeps at most its `max_components_per_object` heaviest, rescaled so that its existence
-is unchanged (only the tail of its density goes); the `max_labels` strongest Bernoullis keep a
-label and the rest, with those below `label_min_existence`, are recycled into the Poisson part
-(their components lose the label, their mass becomes intensity); components of one object that
-fall in the same small cell of state space are merged by moment matching. Every array has a
-fixed capacity, so memory stays flat however long the sequence.
+Then the children lighter than `prune_mass` are dropped; each Bernoulli keeps at most its
+`max_components_per_object` heaviest, rescaled so that its existence is unchanged (only the
+tail of its density goes); Bernoullis below `label_min_existence` are recycled into the Poisson
+part (their components lose the label, their mass becomes intensity); components of one object
+that fall in the same small cell of state space are merged by moment matching. The pool and the
+label slots grow with the scene (arrays double when full), so memory follows the number of
+people in view and stays flat however long the sequence. A positive `capacity` or `max_labels`
+is a hard limit instead (the heaviest children, the strongest Bernoullis are kept), and the
+first time it bites a warning says how many were cut.
+
+Gating: a component and a detection can associate only if the detection's box overlaps the
+component's gate (its predicted box widened by `gate_sigmas` edge standard deviations, one gate
+per object: the union of its components'), found by a sweep (`occtrack.spatial`), so the
+likelihoods, the sums L_ij and loopy BP (cluster by cluster, `lbp_sparse`) cost what the pairs
+that can interact cost. A pair outside the gate has a likelihood below e^(-gate_sigmas^2 / 2)
+of the component's best: with the default 9, far below `prune_mass` for any child it could
+give. `gating = false` computes every pair, to check that nothing moves.
 
 Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
 pluggable miss term.
@@ -46,18 +56,23 @@ pluggable miss term.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from occtrack.association import lbp_marginals
+from occtrack.association import lbp_sparse
 from occtrack.config import TrackerConfig
 from occtrack.models.birth import EdgeBirths
 from occtrack.models.box import BoxMeasurement, heights
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import OcclusionContext, OcclusionModel
+from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
 
 N_BIRTH = 5
 LOG_FLOOR = -300.0
+INITIAL_POOL = 256  # components, when the pool grows with the scene
+INITIAL_SLOTS = 32  # label slots, likewise
 
 
 class GaussianMixturePMB:
@@ -78,7 +93,8 @@ class GaussianMixturePMB:
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
         self.image_size = np.asarray(c.image_size, dtype=float)
         self.survival_inside = float(np.exp(-c.death_rate * c.dt))
-        cap, L = c.capacity, c.max_labels
+        cap = c.capacity or INITIAL_POOL
+        L = c.max_labels or INITIAL_SLOTS
         self.n = 0
         self.mass = np.zeros(cap)
         self.mean = np.zeros((cap, 2, 3))
@@ -100,6 +116,43 @@ class GaussianMixturePMB:
         self.iterations = 0  # loopy BP iterations of the last step
         # running sums of detected half-sizes (count, sum, sum of squares) for the birth prior
         self._size_stats = np.zeros((3, 2))
+        self._warned: set[str] = set()  # hard limits already reported
+
+    # -- storage --------------------------------------------------------------------------
+
+    _POOL = ("mass", "mean", "cov", "det", "occ", "label", "coast")
+    _SLOTS = ("slot_used", "slot_age", "slot_hits", "slot_coast", "slot_detection",
+              "slot_serial")
+
+    def _reserve(self, size: int) -> None:
+        """Room for `size` components: the pool's arrays at least double when they grow."""
+        if size <= len(self.mass):
+            return
+        new = max(size, 2 * len(self.mass))
+        fill = {"label": -1}
+        for name in self._POOL:
+            old = getattr(self, name)
+            arr = np.full((new,) + old.shape[1:], fill.get(name, 0), dtype=old.dtype)
+            arr[:self.n] = old[:self.n]
+            setattr(self, name, arr)
+
+    def _reserve_slots(self, size: int) -> None:
+        """Room for `size` label slots, likewise; a new slot is unused."""
+        old_size = len(self.slot_used)
+        if size <= old_size:
+            return
+        new = max(size, 2 * old_size)
+        fill = {"slot_detection": -1, "slot_serial": -1}
+        for name in self._SLOTS:
+            old = getattr(self, name)
+            arr = np.full(new, fill.get(name, 0), dtype=old.dtype)
+            arr[:old_size] = old
+            setattr(self, name, arr)
+
+    def _warn_once(self, what: str, message: str) -> None:
+        if what not in self._warned:
+            self._warned.add(what)
+            warnings.warn(message, RuntimeWarning, stacklevel=4)
 
     # -- public -------------------------------------------------------------------------
 
@@ -211,6 +264,7 @@ class GaussianMixturePMB:
                                                    size_mean, size_std, 2.0 * size_mean[1])
         keep = mass > 0
         b = int(keep.sum())
+        self._reserve(self.n + b)
         s = slice(self.n, self.n + b)
         self.mass[s], self.mean[s], self.cov[s] = mass[keep], means[keep], covs[keep]
         self.det[s] = c.birth_detectability
@@ -247,23 +301,6 @@ class GaussianMixturePMB:
 
         seen_hidden = np.zeros(M) if terms.seen_hidden is None else np.clip(
             terms.seen_hidden, 0.0, 1.0)
-        hit = np.zeros((n, M))
-        if M:
-            log_hit = self.measurement.loglik(mean, cov, z, observed)
-            if seen_hidden.any():
-                # a source not yet confirmed is weighed like clutter, with the stationary o:
-                # were it taken as never occludable, a detection in a crowd would start a new
-                # track more easily than it is called clutter
-                o_seen = np.where(established, occ, c.occludability)
-                seen = det[:, None] * (1.0 - o_seen[:, None]
-                                       + (o_seen * v)[:, None] * (1.0 - seen_hidden))
-                log_hit += np.log(np.maximum(mass[:, None] * seen, 1e-300))
-            else:
-                log_hit += np.log(np.maximum(mass * pd, 1e-300))[:, None]
-            # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
-            # which are slow to compute with, out of the arrays
-            np.exp(log_hit, out=hit, where=log_hit > LOG_FLOOR)
-
         # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
         # sorted by label, so each object's sums are sums over one contiguous run
         slots = np.flatnonzero(self.slot_used)
@@ -271,38 +308,71 @@ class GaussianMixturePMB:
         row_of_slot = np.full(L, A, dtype=np.int64)
         row_of_slot[slots] = np.arange(A)
         rows = np.where(label >= 0, row_of_slot[np.maximum(label, 0)], A)
-        L_hit = np.zeros((A + 1, M))
+
+        # hit weights l_kj of the pairs (component pk, detection pj) that can associate
+        pk, pj, log_hit, cand = self._pairs(mean, cov, z, observed, rows, A)
+        if len(pk):
+            if seen_hidden.any():
+                # a source not yet confirmed is weighed like clutter, with the stationary o:
+                # were it taken as never occludable, a detection in a crowd would start a new
+                # track more easily than it is called clutter
+                o_seen = np.where(established, occ, c.occludability)[pk]
+                seen = det[pk] * (1.0 - o_seen + o_seen * v[pk] * (1.0 - seen_hidden[pj]))
+                log_hit += np.log(np.maximum(mass[pk] * seen, 1e-300))
+            else:
+                log_hit += np.log(np.maximum(mass * pd, 1e-300))[pk]
+        # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
+        # which are slow to compute with, out of the arrays
+        possible = log_hit > LOG_FLOOR
+        pk, pj, hit = pk[possible], pj[possible], np.exp(log_hit[possible])
+        cand_of_pair = None if cand is None else cand[2][possible]
+
         r_obj = np.zeros(A + 1)
         miss_mass = np.zeros(A + 1)
         if n:
             starts = np.flatnonzero(np.diff(rows, prepend=-1))
-            L_hit[rows[starts]] = np.add.reduceat(hit, starts, axis=0)
             r_obj[rows[starts]] = np.add.reduceat(mass, starts)
             miss_mass[rows[starts]] = np.add.reduceat(mass * miss, starts)
         r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
+        # L_ij = sum_{k in i} l_kj on the object-detection pairs (edges), L_0j of the Poisson part
+        prow = rows[pk]
+        mine = prow < A
+        poisson_hit = np.bincount(pj[~mine], weights=hit[~mine], minlength=M)
+        if cand is None:  # every (object, detection) pair is a candidate edge
+            cand_row, cand_col = np.divmod(np.arange(A * M), max(M, 1))
+            cand_of_pair = prow * M + pj
+        else:
+            cand_row, cand_col = cand[0], cand[1]
+        L_cand = np.bincount(cand_of_pair[mine], weights=hit[mine], minlength=len(cand_row))
+        live = L_cand > 0
+        e_row, e_col, L_edge = cand_row[live], cand_col[live], L_cand[live]
+        edge_of_pair = (np.cumsum(live) - 1)[cand_of_pair[mine]]
         W, H = self.image_size
         size = np.maximum((z[:, :, 1] - z[:, :, 0]).prod(axis=1), 1.0)
         clutter = c.clutter_rate / (W * H * size) * np.clip(scores, c.score_floor, 1.0) ** (
             -c.clutter_score_power) * (1.0 - c.occludability * seen_hidden)
-        w_new = clutter + L_hit[A]
+        w_new = clutter + poisson_hit
 
-        marg = lbp_marginals(L_hit[:A], miss_obj, w_new, tol=c.lbp_tolerance,
-                             max_iter=c.lbp_max_iterations)
+        marg = lbp_sparse(e_row, e_col, L_edge, miss_obj, w_new, tol=c.lbp_tolerance,
+                          max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
-        self._count_detections(slots, marg.p_hit)
+        self._count_detections(slots, e_row, e_col, marg.p_hit)
 
-        hit_factor = np.zeros((A + 1, M))
-        np.divide(marg.p_hit, L_hit[:A], out=hit_factor[:A], where=L_hit[:A] > 0)
-        hit_factor[A] = marg.p_new / w_new
+        hit_factor = (marg.p_new / w_new)[pj]
+        hit_factor[mine] = (marg.p_hit / L_edge)[edge_of_pair]
         miss_factor = np.append(marg.p_miss / miss_obj, 1.0)
-        children = np.empty((n, M + 1))
-        children[:, 0] = mass * miss * miss_factor[rows]
-        np.multiply(hit, hit_factor[rows], out=children[:, 1:])
+        # children: one miss child per component, then one hit child per pair
+        children = np.concatenate([mass * miss * miss_factor[rows], hit * hit_factor])
 
-        keep = self._select(children.ravel())
-        parent, j = np.divmod(keep, M + 1)
-        j -= 1
-        new_mass = children.ravel()[keep]
+        keep = self._select(children)
+        missed = keep < n
+        pair = np.where(missed, 0, keep - n)
+        parent = np.where(missed, keep, pk[pair] if len(pk) else 0)
+        j = np.where(missed, -1, pj[pair] if len(pj) else 0)
+        # in the order of the parents, a miss child before its hit children
+        order = np.argsort(parent * (M + 1) + j + 1, kind="stable")
+        keep, parent, j = keep[order], parent[order], j[order]
+        new_mass = children[keep]
         if c.max_components_per_object:
             trim = self._trim_objects(new_mass, label[parent], j)
             keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
@@ -334,6 +404,8 @@ class GaussianMixturePMB:
         alive = self._confirm_or_delete(new_label)
 
         k = int(alive.sum())
+        self.n = 0  # (nothing of the old pool is kept)
+        self._reserve(k)
         self.n = k
         self.mass[:k], self.mean[:k], self.cov[:k] = (new_mass[alive], new_mean[alive],
                                                        new_cov[alive])
@@ -341,14 +413,50 @@ class GaussianMixturePMB:
         self.coast[:k], self.label[:k] = new_coast[alive], new_label[alive]
         self._cap_existence()
 
-    def _count_detections(self, slots: np.ndarray, p_hit: np.ndarray) -> None:
-        """Per-slot bookkeeping of this step's association: an object took detection j when
-        p_hit_ij > 1/2 (at most one j can)."""
+    def _pairs(self, mean: np.ndarray, cov: np.ndarray, z: np.ndarray, observed: np.ndarray,
+               rows: np.ndarray, A: int):
+        """The (component, detection) pairs that can associate and log p(z_j | x_k) on them:
+        (pk, pj, loglik, candidates). Small problems and `gating = false` list every pair
+        (candidates None: every (object, detection) pair may be an edge). Otherwise the pairs
+        whose gates overlap: one gate per object row (the union of its components' gates, so
+        each object is looked up once), one per Poisson component; candidates are then the
+        (object row, detection) pairs found, (row, column, candidate of each listed pair)."""
+        n, M = len(mean), len(z)
+        c = self.config
+        if not c.gating or n * M <= DENSE_PAIRS:
+            loglik = self.measurement.loglik(mean, cov, z, observed) if n and M else np.zeros(0)
+            return (np.repeat(np.arange(n), M), np.tile(np.arange(M), n), loglik.ravel(),
+                    None)
+        zhat, S = self.measurement.innovation(mean, cov)
+        gates = self.measurement.gates(zhat, S, c.gate_sigmas)
+        first = np.ones(n, dtype=bool)
+        first[1:] = (rows[1:] != rows[:-1]) | (rows[1:] == A)
+        start = np.flatnonzero(first)
+        size = np.diff(np.append(start, n))
+        unit_gates = np.stack([np.minimum.reduceat(gates[..., 0], start),
+                               np.maximum.reduceat(gates[..., 1], start)], axis=-1)
+        boxes = z
+        unmeasured = ~observed.any(axis=2)  # both edges of an axis on the border: no gate
+        if unmeasured.any():
+            boxes = z.copy()
+            boxes[unmeasured] = [-np.inf, np.inf]
+        ui, uj = overlapping_pairs(unit_gates, boxes)
+        count = size[ui]
+        total = int(count.sum())
+        cand_of_pair = np.repeat(np.arange(len(ui)), count)
+        pk = np.repeat(start[ui] - (np.cumsum(count) - count), count) + np.arange(total)
+        pj = uj[cand_of_pair]
+        loglik = self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj)
+        return pk, pj, loglik, (rows[start[ui]], uj, cand_of_pair)
+
+    def _count_detections(self, slots: np.ndarray, row: np.ndarray, col: np.ndarray,
+                          p_hit: np.ndarray) -> None:
+        """Per-slot bookkeeping of this step's association: an object (row of `slots`) took
+        detection j when p_hit_ij > 1/2 (at most one j can); p_hit is given on the pairs
+        (row, col)."""
         self.slot_detection[:] = -1
-        if len(slots) and p_hit.shape[1]:
-            best = p_hit.argmax(axis=1)
-            took = p_hit[np.arange(len(slots)), best] > 0.5
-            self.slot_detection[slots[took]] = best[took]
+        took = p_hit > 0.5
+        self.slot_detection[slots[row[took]]] = col[took]
         used = self.slot_used
         hit = self.slot_detection >= 0
         self.slot_age[used] += 1
@@ -379,12 +487,21 @@ class GaussianMixturePMB:
             arr[:n] = arr[:n][order]
 
     def _select(self, flat: np.ndarray) -> np.ndarray:
-        """Indices (sorted) of the heaviest children above the pruning mass, leaving room for
-        the next step's births."""
-        room = self.config.capacity - N_BIRTH
+        """Indices (sorted) of the children above the pruning mass; under a hard `capacity`
+        the heaviest of them, leaving room for the next step's births (the first time it
+        bites, a warning gives the count)."""
         keep = np.flatnonzero(flat > self.config.prune_mass)
-        if len(keep) > room:
-            keep = keep[np.argpartition(-flat[keep], room - 1)[:room]]
+        capacity = self.config.capacity
+        room = capacity - N_BIRTH
+        if capacity and len(keep) > room:
+            order = np.argpartition(-flat[keep], room - 1)
+            lost = flat[keep[order[room:]]]
+            self._warn_once("capacity", (
+                f"capacity = {capacity} Gaussian components reached at step {self.steps + 1}: "
+                f"{len(keep)} were above prune_mass, the {len(lost)} lightest (mass up to "
+                f"{lost.max():.3g}) were dropped; set capacity = 0 to let the pool grow with "
+                f"the scene (reported once)"))
+            keep = keep[order[:room]]
             keep.sort()
         return keep
 
@@ -416,8 +533,11 @@ class GaussianMixturePMB:
 
     def _assign_labels(self, mass: np.ndarray, label: np.ndarray, newborn: np.ndarray,
                        M: int) -> np.ndarray:
-        """Keep the `max_labels` strongest Bernoullis (existing and new) above the label
-        threshold; recycle the others into the Poisson part."""
+        """Keep a label for every Bernoulli (existing and new) above the label threshold
+        (under a hard `max_labels`, for the strongest that many: the first time that recycles
+        one above the threshold, a warning gives the count); recycle the others into the
+        Poisson part."""
+        limit = self.config.max_labels
         L = len(self.slot_used)
         lab = label >= 0
         r_old = np.bincount(label[lab], weights=mass[lab], minlength=L)
@@ -428,7 +548,17 @@ class GaussianMixturePMB:
         r_all = np.concatenate([r_old[old], r_new[new]])
         eligible = r_all >= self.config.label_min_existence
         ranked = np.argsort(-r_all, kind="stable")
-        ranked = ranked[eligible[ranked]][:L]
+        ranked = ranked[eligible[ranked]]
+        if limit and len(ranked) > limit:
+            lost = r_all[ranked[limit:]]
+            self._warn_once("labels", (
+                f"max_labels = {limit} reached at step {self.steps + 1}: {len(ranked)} "
+                f"Bernoullis held existence >= {self.config.label_min_existence:g}, the "
+                f"{len(lost)} weakest (existence up to {lost.max():.3g}, "
+                f"{int((lost > self.config.report_existence).sum())} of them reported) were "
+                f"recycled into the Poisson part and lose their tracks; set max_labels = 0 to "
+                f"let labels grow with the scene (reported once)"))
+            ranked = ranked[:limit]
         keep_old = np.zeros(len(old), dtype=bool)
         keep_old[ranked[ranked < len(old)]] = True
         keep_new = ranked[ranked >= len(old)] - len(old)
@@ -441,6 +571,7 @@ class GaussianMixturePMB:
             gone[dropped] = True
             label = np.where(lab & gone[np.maximum(label, 0)], -1, label)
         if len(keep_new):
+            self._reserve_slots(int(self.slot_used.sum()) + len(keep_new))
             free = np.flatnonzero(~self.slot_used)[:len(keep_new)]
             self.slot_used[free] = True
             slot_of_meas = np.full(M, -1, dtype=np.int64)

@@ -106,6 +106,63 @@ class BoxMeasurement:
         out[:, rows] += beyond.reshape(len(means), -1) @ flat.T
         return out
 
+    def innovation(self, means: np.ndarray,
+                   covs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Predicted edges zhat (K, 2, 2) and innovation covariances S (K, 2, 2, 2)."""
+        zhat, S, _ = gaussian.innovation(means, covs, self.H, self.R(means))
+        return zhat, S
+
+    @staticmethod
+    def gates(zhat: np.ndarray, S: np.ndarray, sigmas: float) -> np.ndarray:
+        """Each component's gate (K, 2, 2): its predicted box widened on each axis by `sigmas`
+        standard deviations of that axis's less certain edge. The two axes are independent
+        blocks and a Mahalanobis distance is at least any one coordinate's distance in its own
+        standard deviations, so a detection whose box misses the gate lies more than `sigmas`
+        standard deviations off on a measured edge (an axis with one edge on the border has
+        the other measured): its log-likelihood is more than sigmas^2 / 2 below the best the
+        component can give."""
+        sd = np.sqrt(np.maximum(S[:, :, 0, 0], S[:, :, 1, 1]))
+        low = np.minimum(zhat[..., 0], zhat[..., 1]) - sigmas * sd
+        high = np.maximum(zhat[..., 0], zhat[..., 1]) + sigmas * sd
+        return np.stack([low, high], axis=-1)
+
+    def loglik_pairs(self, means: np.ndarray, zhat: np.ndarray, S: np.ndarray, z: np.ndarray,
+                     observed: np.ndarray, k: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """log p(z_j | component k) of the pairs (k[e], j[e]) only, censored edges included:
+        the numbers `loglik` gives for those pairs."""
+        a, b, c = S[..., 0, 0], S[..., 0, 1], S[..., 1, 1]  # (K, 2): per component and axis
+        det = a * c - b * b
+        r = z[j] - zhat[k]  # (P, 2, 2)
+        if observed.all():
+            ak, bk, ck, dk = a[k], b[k], c[k], det[k]
+            r0, r1 = r[..., 0], r[..., 1]
+            quad = (ck * r0 * r0 - 2.0 * bk * r0 * r1 + ak * r1 * r1) / dk
+            return -0.5 * (quad + np.log(dk) + 2.0 * gaussian.LOG_2PI).sum(axis=1)
+        obs = observed[j]  # (P, 2, 2)
+        o0, o1 = obs[..., 0], obs[..., 1]
+        r0, r1 = np.where(o0, r[..., 0], 0.0), np.where(o1, r[..., 1], 0.0)
+        ak, bk, ck, dk = a[k], b[k], c[k], det[k]
+        both = o0 & o1
+        quad = np.where(both, (ck * r0 * r0 - 2.0 * bk * r0 * r1 + ak * r1 * r1) / dk,
+                        r0 * r0 / ak + r1 * r1 / ck)
+        logdet = np.where(both, np.log(dk) + 2.0 * gaussian.LOG_2PI,
+                          o0 * (np.log(ak) + gaussian.LOG_2PI)
+                          + o1 * (np.log(ck) + gaussian.LOG_2PI))
+        out = -0.5 * (quad + logdet).sum(axis=1)
+        censored = ~observed
+        some = censored.reshape(len(z), -1).any(axis=1)[j]
+        if some.any():
+            sd = np.sqrt(np.stack([a, c], axis=-1))  # (K, 2, 2) edge std
+            border = np.stack([np.full(2, self.border_margin),
+                               self.image_size - self.border_margin], axis=-1)
+            sign = np.array([1.0, -1.0])
+            log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
+            e = np.flatnonzero(some)
+            ke = k[e]
+            beyond = log_ndtr(sign * (border - zhat[ke]) / sd[ke]) + log_peak[ke, None, None]
+            out[e] += np.where(censored[j[e]], beyond, 0.0).sum(axis=(1, 2))
+        return out
+
     def update(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                observed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Kalman update of aligned (component, measurement) pairs with the measured edges."""

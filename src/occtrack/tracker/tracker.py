@@ -83,7 +83,7 @@ class Tracker:
             occlusion = box_occlusion(c.occlusion, geometry, c.occluder_min_existence)
         self.occlusion = occlusion
         self.filter = GaussianMixturePMB(c, occlusion)
-        L = c.max_labels
+        L = len(self.filter.slot_used)  # per label slot, growing with the filter's
         self._reported_serial = np.full(L, -1, dtype=np.int64)
         self._report_id = np.zeros(L, dtype=np.int64)
         self._next_id = 1
@@ -132,6 +132,10 @@ class Tracker:
         to within `report_centre_std` box heights (a coasting estimate drifts, and a box
         shown where nobody is costs more than one left out)."""
         f, c = self.filter, self.config
+        grow = len(f.slot_used) - len(self._report_id)
+        if grow > 0:
+            self._reported_serial = np.append(self._reported_serial, np.full(grow, -1))
+            self._report_id = np.append(self._report_id, np.zeros(grow, dtype=np.int64))
         r, means, centre_std = f.object_moments()
         took = f.slot_detection
         height = np.maximum(2.0 * means[:, 1, 2], 1.0)
