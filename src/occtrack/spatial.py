@@ -42,32 +42,35 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         return empty, empty
     if N * M <= dense_pairs:
         return _dense(a, b)
-    width = b[:, 0, 1] - b[:, 0, 0]
+    a_x0, a_x1 = np.ascontiguousarray(a[:, 0, 0]), np.ascontiguousarray(a[:, 0, 1])
+    a_y0, a_y1 = np.ascontiguousarray(a[:, 1, 0]), np.ascontiguousarray(a[:, 1, 1])
+    b_x0, b_x1 = np.ascontiguousarray(b[:, 0, 0]), np.ascontiguousarray(b[:, 0, 1])
+    width = b_x1 - b_x0
     typical = float(np.partition(width, M // 2)[M // 2])
     wide = width > 4.0 * typical + 1e-9
-    normal = np.flatnonzero(~wide)
     i_parts, j_parts = [], []
+    normal = np.flatnonzero(~wide) if wide.any() else np.arange(M)
     if len(normal):
-        order = normal[np.argsort(b[normal, 0, 0], kind="stable")]
-        low = b[order, 0, 0]
+        order = normal[np.argsort(b_x0[normal], kind="stable")]
+        low = b_x0[order]
+        # the second set in sweep order, so that the candidates read contiguous runs
+        s_x1, s_y0, s_y1 = b_x1[order], b[order, 1, 0], b[order, 1, 1]
         widest = float(width[normal].max())
-        start = np.searchsorted(low, a[:, 0, 0] - widest, side="left")
-        stop = np.searchsorted(low, a[:, 0, 1], side="left")
+        start = np.searchsorted(low, a_x0 - widest, side="left")
+        stop = np.searchsorted(low, a_x1, side="left")
         counts = np.maximum(stop - start, 0)
         total = int(counts.sum())
         if total:
             i = np.repeat(np.arange(N), counts)
-            offset = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
-            j = order[np.repeat(start, counts) + offset]
-            ok = ((a[i, 0, 0] < b[j, 0, 1]) & (a[i, 1, 0] < b[j, 1, 1])
-                  & (b[j, 1, 0] < a[i, 1, 1]))
+            k = np.arange(total) + np.repeat(start - (np.cumsum(counts) - counts), counts)
+            ok = (a_x0[i] < s_x1[k]) & (a_y0[i] < s_y1[k]) & (s_y0[k] < a_y1[i])
             i_parts.append(i[ok])
-            j_parts.append(j[ok])
+            j_parts.append(order[k[ok]])
     if wide.any():
-        k = np.flatnonzero(wide)
-        i, jj = _dense(a, b[k])
+        w = np.flatnonzero(wide)
+        i, jj = _dense(a, b[w])
         i_parts.append(i)
-        j_parts.append(k[jj])
+        j_parts.append(w[jj])
     if not i_parts:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
