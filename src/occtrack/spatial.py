@@ -33,14 +33,14 @@ def _dense(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def overlapping_pairs(a: np.ndarray, b: np.ndarray,
-                      dense_pairs: int = DENSE_PAIRS) -> tuple[np.ndarray, np.ndarray]:
+                      dense_pairs: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(i, j): every pair of box a[i] (N, 2, 2) and box b[j] (M, 2, 2) that overlap, each once,
     in no particular order."""
     N, M = len(a), len(b)
     if N == 0 or M == 0:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
-    if N * M <= dense_pairs:
+    if N * M <= (DENSE_PAIRS if dense_pairs is None else dense_pairs):
         return _dense(a, b)
     a_x0, a_x1 = np.ascontiguousarray(a[:, 0, 0]), np.ascontiguousarray(a[:, 0, 1])
     a_y0, a_y1 = np.ascontiguousarray(a[:, 1, 0]), np.ascontiguousarray(a[:, 1, 1])

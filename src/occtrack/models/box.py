@@ -132,12 +132,25 @@ class BoxMeasurement:
         the numbers `loglik` gives for those pairs."""
         a, b, c = S[..., 0, 0], S[..., 0, 1], S[..., 1, 1]  # (K, 2): per component and axis
         det = a * c - b * b
+        out = np.empty(len(k))
+        full = observed.all(axis=(1, 2))
+        e = np.arange(len(k)) if full.all() else np.flatnonzero(full[j])
+        if len(e):  # detections with every edge measured: S^-1 in closed form, per axis
+            ke, je = (k, j) if len(e) == len(k) else (k[e], j[e])
+            total = 0.0
+            for axis in range(2):
+                inv = 1.0 / det[:, axis]
+                r0 = z[je, axis, 0] - zhat[ke, axis, 0]
+                r1 = z[je, axis, 1] - zhat[ke, axis, 1]
+                total = total + ((c[:, axis] * inv)[ke] * r0 * r0
+                                 - (2.0 * b[:, axis] * inv)[ke] * r0 * r1
+                                 + (a[:, axis] * inv)[ke] * r1 * r1)
+            out[e] = -0.5 * (total + (np.log(det).sum(axis=1) + 4.0 * gaussian.LOG_2PI)[ke])
+        if len(e) == len(k):
+            return out
+        e = np.flatnonzero(~full[j])  # the pairs of detections with an edge on the border
+        k, j = k[e], j[e]
         r = z[j] - zhat[k]  # (P, 2, 2)
-        if observed.all():
-            ak, bk, ck, dk = a[k], b[k], c[k], det[k]
-            r0, r1 = r[..., 0], r[..., 1]
-            quad = (ck * r0 * r0 - 2.0 * bk * r0 * r1 + ak * r1 * r1) / dk
-            return -0.5 * (quad + np.log(dk) + 2.0 * gaussian.LOG_2PI).sum(axis=1)
         obs = observed[j]  # (P, 2, 2)
         o0, o1 = obs[..., 0], obs[..., 1]
         r0, r1 = np.where(o0, r[..., 0], 0.0), np.where(o1, r[..., 1], 0.0)
@@ -148,24 +161,20 @@ class BoxMeasurement:
         logdet = np.where(both, np.log(dk) + 2.0 * gaussian.LOG_2PI,
                           o0 * (np.log(ak) + gaussian.LOG_2PI)
                           + o1 * (np.log(ck) + gaussian.LOG_2PI))
-        out = -0.5 * (quad + logdet).sum(axis=1)
-        censored = ~observed
-        some = censored.reshape(len(z), -1).any(axis=1)[j]
-        if some.any():
-            e = np.flatnonzero(some)
-            # log P(edge beyond the border) of the components concerned, as in `loglik`
-            needed = np.zeros(len(zhat), dtype=bool)
-            needed[k[e]] = True
-            comps = np.flatnonzero(needed)
-            place = np.zeros(len(zhat), dtype=np.int64)
-            place[comps] = np.arange(len(comps))
-            sd = np.sqrt(np.stack([a[comps], c[comps]], axis=-1))  # (C, 2, 2) edge std
-            border = np.stack([np.full(2, self.border_margin),
-                               self.image_size - self.border_margin], axis=-1)
-            sign = np.array([1.0, -1.0])
-            log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means[comps]) ** 2)
-            beyond = log_ndtr(sign * (border - zhat[comps]) / sd) + log_peak[:, None, None]
-            out[e] += np.where(censored[j[e]], beyond[place[k[e]]], 0.0).sum(axis=(1, 2))
+        out[e] = -0.5 * (quad + logdet).sum(axis=1)
+        # log P(edge beyond the border) of the components concerned, as in `loglik`
+        needed = np.zeros(len(zhat), dtype=bool)
+        needed[k] = True
+        comps = np.flatnonzero(needed)
+        place = np.zeros(len(zhat), dtype=np.int64)
+        place[comps] = np.arange(len(comps))
+        sd = np.sqrt(np.stack([a[comps], c[comps]], axis=-1))  # (C, 2, 2) edge std
+        border = np.stack([np.full(2, self.border_margin),
+                           self.image_size - self.border_margin], axis=-1)
+        sign = np.array([1.0, -1.0])
+        log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means[comps]) ** 2)
+        beyond = log_ndtr(sign * (border - zhat[comps]) / sd) + log_peak[:, None, None]
+        out[e] += np.where(~obs, beyond[place[k]], 0.0).sum(axis=(1, 2))
         return out
 
     def update(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
