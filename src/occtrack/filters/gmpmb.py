@@ -71,6 +71,7 @@ from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
 
 N_BIRTH = 5
 LOG_FLOOR = -300.0
+EDGE_FLOOR = 1e-9  # gating: association edges that cannot reach this p_hit are left out
 INITIAL_POOL = 256  # components, when the pool grows with the scene
 INITIAL_SLOTS = 32  # label slots, likewise
 
@@ -353,13 +354,20 @@ class GaussianMixturePMB:
             -c.clutter_score_power) * (1.0 - c.occludability * seen_hidden)
         w_new = clutter + poisson_hit
 
-        marg = lbp_sparse(e_row, e_col, L_edge, miss_obj, w_new, tol=c.lbp_tolerance,
-                          max_iter=c.lbp_max_iterations)
+        # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
+        # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
+        # such edges out (gating) splits a crowd's graph into the clusters that really compete
+        strong = (L_edge >= EDGE_FLOOR * miss_obj[e_row] * w_new[e_col]) if c.gating else (
+            np.ones(len(L_edge), dtype=bool))
+        marg = lbp_sparse(e_row[strong], e_col[strong], L_edge[strong], miss_obj, w_new,
+                          tol=c.lbp_tolerance, max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
-        self._count_detections(slots, e_row, e_col, marg.p_hit)
+        self._count_detections(slots, e_row[strong], e_col[strong], marg.p_hit)
 
         hit_factor = (marg.p_new / w_new)[pj]
-        hit_factor[mine] = (marg.p_hit / L_edge)[edge_of_pair]
+        edge_factor = np.zeros(len(L_edge))
+        edge_factor[strong] = marg.p_hit / L_edge[strong]
+        hit_factor[mine] = edge_factor[edge_of_pair]
         miss_factor = np.append(marg.p_miss / miss_obj, 1.0)
         # children: one miss child per component, then one hit child per pair
         children = np.concatenate([mass * miss * miss_factor[rows], hit * hit_factor])
@@ -423,11 +431,10 @@ class GaussianMixturePMB:
         (object row, detection) pairs found, (row, column, candidate of each listed pair)."""
         n, M = len(mean), len(z)
         c = self.config
-        if not c.gating or n * M <= DENSE_PAIRS:
-            loglik = self.measurement.loglik(mean, cov, z, observed) if n and M else np.zeros(0)
-            return (np.repeat(np.arange(n), M), np.tile(np.arange(M), n), loglik.ravel(),
-                    None)
         zhat, S = self.measurement.innovation(mean, cov)
+        if not c.gating or n * M <= DENSE_PAIRS:
+            pk, pj = np.repeat(np.arange(n), M), np.tile(np.arange(M), n)
+            return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), None
         gates = self.measurement.gates(zhat, S, c.gate_sigmas)
         first = np.ones(n, dtype=bool)
         first[1:] = (rows[1:] != rows[:-1]) | (rows[1:] == A)

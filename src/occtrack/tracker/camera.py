@@ -28,7 +28,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
+from occtrack.spatial import overlapping_pairs
+
+DENSE_PAIRS = 256  # more box pairs than this: the sparse form (faster from here on)
 
 
 def _centres(boxes: np.ndarray) -> np.ndarray:
