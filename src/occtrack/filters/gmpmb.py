@@ -605,11 +605,23 @@ class GaussianMixturePMB:
         cell = np.array([c.merge_position, c.merge_velocity, c.merge_position] * 2)
         cells = np.floor(mean.reshape(-1, 6) / (cell * np.exp2(octave)[:, None])).astype(
             np.int64)
-        cells = np.concatenate([octave[:, None], cells], axis=1)
-        order = np.lexsort([cells[:, i] for i in range(6, -1, -1)] + [label])
-        key = np.concatenate([label[order, None], cells[order]], axis=1)
-        start = np.ones(len(order), dtype=bool)
-        start[1:] = (key[1:] != key[:-1]).any(axis=1)
+        key = np.concatenate([label[:, None], octave[:, None], cells], axis=1)
+        # one integer per cell (mixed radix, label first) when it fits: one sort instead of
+        # lexsort's eight, the same order
+        low = key.min(axis=0)
+        span = key.max(axis=0) - low + 1
+        if np.log2(span.astype(float)).sum() < 62:
+            radix = np.append(np.cumprod(span[::-1])[::-1][1:], 1)
+            packed = (key - low) @ radix
+            order = np.argsort(packed, kind="stable")
+            packed = packed[order]
+            start = np.ones(len(order), dtype=bool)
+            start[1:] = packed[1:] != packed[:-1]
+        else:
+            order = np.lexsort(key.T[::-1])
+            key = key[order]
+            start = np.ones(len(order), dtype=bool)
+            start[1:] = (key[1:] != key[:-1]).any(axis=1)
         if start.all():
             return mass, mean, cov, det, occ, coast, label
         first = np.flatnonzero(start)
