@@ -625,18 +625,30 @@ class GaussianMixturePMB:
         if start.all():
             return mass, mean, cov, det, occ, coast, label
         first = np.flatnonzero(start)
-        group = np.cumsum(start) - 1
-        m = mass[order]
-        total = np.add.reduceat(m, first)
+        # a component alone in its cell is its own moment match (share 1, no spread): only
+        # the cells holding several are pooled
+        size = np.diff(np.append(first, len(order)))
+        pooled = size > 1
+        member = np.repeat(pooled, size)
+        sub = order[member]
+        sub_first = np.cumsum(np.append(0, size[pooled][:-1]))
+        group = np.repeat(np.arange(len(sub_first)), size[pooled])
+        m = mass[sub]
+        total = np.add.reduceat(m, sub_first)
         share = m / total[group]
-        mu = np.add.reduceat(share[:, None, None] * mean[order], first)
-        dev = mean[order] - mu[group]
-        spread = cov[order] + dev[..., :, None] * dev[..., None, :]
-        sigma = np.add.reduceat(share[:, None, None, None] * spread, first)
-        d = np.add.reduceat(share * det[order], first)
-        o = np.add.reduceat(share * occ[order], first)
-        t = np.add.reduceat(share * coast[order], first)
-        return total, mu, sigma, d, o, t, label[order][first]
+        mu = np.add.reduceat(share[:, None, None] * mean[sub], sub_first)
+        dev = mean[sub] - mu[group]
+        spread = cov[sub] + dev[..., :, None] * dev[..., None, :]
+        sigma = np.add.reduceat(share[:, None, None, None] * spread, sub_first)
+        alone = order[first[~pooled]]
+        out = [np.empty((len(first),) + a.shape[1:], dtype=a.dtype)
+               for a in (mass, mean, cov, det, occ, coast)]
+        for arr, mixed, source in zip(out[:3], (total, mu, sigma), (mass, mean, cov), strict=True):
+            arr[pooled], arr[~pooled] = mixed, source[alone]
+        for arr, source in zip(out[3:], (det, occ, coast), strict=True):
+            arr[pooled] = np.add.reduceat(share * source[sub], sub_first)
+            arr[~pooled] = source[alone]
+        return (*out, label[order][first])
 
     def _cap_existence(self) -> None:
         """Guard against r exceeding 1 by rounding: scale such an object's masses down."""
