@@ -47,8 +47,13 @@ component's gate (its predicted box widened by `gate_sigmas` edge standard devia
 per object: the union of its components'), found by a sweep (`occtrack.spatial`), so the
 likelihoods, the sums L_ij and loopy BP (cluster by cluster, `lbp_sparse`) cost what the pairs
 that can interact cost. A pair outside the gate has a likelihood below e^(-gate_sigmas^2 / 2)
-of the component's best: with the default 9, far below `prune_mass` for any child it could
-give. `gating = false` computes every pair, to check that nothing moves.
+of the component's best (with the default 9, e^-40: times the largest ratio of a component's
+peak density to the clutter density, about 1e6, still far below `prune_mass` for any child it
+could give). An association edge with L_ij < EDGE_FLOOR miss_i w_new_j cannot reach
+p_hit_ij = EDGE_FLOOR (1e-9), so its hit children fall below `prune_mass` whatever loopy BP
+says; leaving such edges out splits a crowd's graph into the clusters that really compete.
+`gating = false` computes every pair and keeps every edge, to check that nothing moves
+(benchmarks/bench_gating.py: no MOT17 metric moves).
 
 Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
 pluggable miss term.
