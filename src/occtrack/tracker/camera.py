@@ -30,7 +30,8 @@ import numpy as np
 
 from occtrack.spatial import overlapping_pairs
 
-DENSE_PAIRS = 256  # more box pairs than this: the sparse form (faster from here on)
+DENSE_PAIRS = 4096  # more box pairs than this: the sparse form (faster from here on)
+DENSE_VOTES = 64  # more candidates than this: votes counted by a sweep, not a C x C table
 
 
 def _centres(boxes: np.ndarray) -> np.ndarray:
@@ -48,6 +49,15 @@ def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def _edges(boxes: np.ndarray) -> np.ndarray:
     """(N, 4) left, top, width, height -> (N, 2, 2) edges."""
     return np.stack([boxes[:, :2], boxes[:, :2] + boxes[:, 2:]], axis=-1)
+
+
+def _median(values: np.ndarray) -> np.ndarray:
+    """np.median(values, axis=0), the same numbers, without its overhead."""
+    ordered = np.sort(values, axis=0)
+    half = len(ordered) // 2
+    if len(ordered) % 2:
+        return ordered[half]
+    return (ordered[half - 1] + ordered[half]) / 2.0
 
 
 def _first_best(group: np.ndarray, value: np.ndarray, other: np.ndarray,
@@ -86,8 +96,11 @@ def estimate_shift(previous: np.ndarray, current: np.ndarray, height_ratio: floa
         return None
     candidates = shift[near]
     unit = scale[near]
-    gap = np.abs(candidates[:, None, :] - candidates[None, :, :]).max(axis=-1)
-    votes = (gap < mode_radius * np.minimum(unit[:, None], unit[None, :])).sum(axis=1)
+    if len(candidates) > DENSE_VOTES:
+        votes = _votes(candidates, mode_radius * unit)
+    else:
+        gap = np.abs(candidates[:, None, :] - candidates[None, :, :]).max(axis=-1)
+        votes = (gap < mode_radius * np.minimum(unit[:, None], unit[None, :])).sum(axis=1)
     mode = candidates[np.argmax(votes)]
     moved = previous.copy()
     moved[:, :2] += mode
@@ -99,7 +112,7 @@ def estimate_shift(previous: np.ndarray, current: np.ndarray, height_ratio: floa
     if mutual.sum() < min_pairs:
         return None
     i = np.flatnonzero(mutual)
-    return np.median(shift[i, best_cur[i]], axis=0)
+    return _median(shift[i, best_cur[i]])
 
 
 def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: float,
@@ -132,7 +145,7 @@ def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: fl
     if mutual.sum() < min_pairs:
         return None
     k = np.flatnonzero(mutual)
-    return np.median(cc[best_cur[k]] - cp[k], axis=0)
+    return _median(cc[best_cur[k]] - cp[k])
 
 
 def _votes(points: np.ndarray, radius: np.ndarray) -> np.ndarray:
