@@ -39,10 +39,13 @@ def _centres(boxes: np.ndarray) -> np.ndarray:
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    lo = np.maximum(a[:, None, :2], b[None, :, :2])
-    hi = np.minimum(a[:, None, :2] + a[:, None, 2:], b[None, :, :2] + b[None, :, 2:])
-    inter = np.clip(hi - lo, 0.0, None).prod(axis=-1)
-    union = a[:, None, 2:].prod(axis=-1) + b[None, :, 2:].prod(axis=-1) - inter
+    a_hi, b_hi = a[:, :2] + a[:, 2:], b[:, :2] + b[:, 2:]
+    across = np.minimum(a_hi[:, None, 0], b_hi[None, :, 0]) - np.maximum(a[:, None, 0],
+                                                                          b[None, :, 0])
+    down = np.minimum(a_hi[:, None, 1], b_hi[None, :, 1]) - np.maximum(a[:, None, 1],
+                                                                        b[None, :, 1])
+    inter = np.maximum(across, 0.0) * np.maximum(down, 0.0)
+    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :] - inter
     return inter / np.maximum(union, 1e-12)
 
 
