@@ -3,9 +3,10 @@
     python benchmarks/bench_tracker.py [--frames 600] [--memory-frames 10000] [--repeats 3]
 
 Speed: tracked frames (calls of `Tracker.step`) per second for each occlusion model, default
-capacities (2048 components, 72 labels), time spent inside `step` only. Wall-clock time is what
-a user waits; CPU time of this process is printed beside it because the machine may be shared
-(other processes slow the wall clock, not the CPU time). The best of --repeats runs counts.
+settings (components and labels grow with the scene), time spent inside `step` only. Wall-clock
+time is what a user waits; CPU time of this process is printed beside it because the machine
+may be shared (other processes slow the wall clock, not the CPU time). The best of --repeats
+runs counts.
 
 Memory: the same scene run for --memory-frames tracked frames with tracemalloc on from before
 the tracker is built; the memory held by Python and numpy (the tracker's arrays included)
@@ -66,7 +67,7 @@ def main() -> None:
     frames = frames_of(scene)
     per_frame = len(scene.detections) / args.frames
     print(f"scene: 40 pedestrians in view, {per_frame:.1f} detections per frame, "
-          f"{args.frames} tracked frames at 15 Hz, default capacities")
+          f"{args.frames} tracked frames at 15 Hz, default settings")
     print(f"{'occlusion':<18}{'frames/s (wall)':>17}{'frames/s (CPU)':>16}{'components':>12}")
     for name in OCCLUSION_NAMES:
         wall, cpu, n = speed(frames, name, args.repeats)

@@ -8,6 +8,7 @@ that these tests check. (These steps run rarely on the scenes the other tests us
 from __future__ import annotations
 
 import itertools
+import warnings
 
 import numpy as np
 import pytest
@@ -109,11 +110,17 @@ def groups(f):
 
 
 def test_select_keeps_the_heaviest_children_when_over_capacity():
+    """A hard capacity keeps the heaviest children and says so, once, with the count."""
     f = make()  # capacity 16: room for 11 children plus the next step's 5 births
     room = 16 - N_BIRTH
     rng = np.random.default_rng(0)
     flat = rng.permutation(np.concatenate([np.linspace(0.01, 0.3, 25), [1e-6, 5e-6, 0.0]]))
-    keep = f._select(flat)
+    with pytest.warns(RuntimeWarning, match="capacity = 16 .* 25 were above prune_mass, "
+                                            "the 14 lightest"):
+        keep = f._select(flat)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.array_equal(f._select(flat), keep)  # reported once
     heaviest = np.sort(np.argsort(-flat)[:room])
     assert np.array_equal(keep, heaviest)
     assert np.sort(flat[keep]) == pytest.approx(np.linspace(0.01, 0.3, 25)[-room:], abs=0)
@@ -134,6 +141,7 @@ def test_select_below_capacity_only_prunes():
     assert f._select(exactly).tolist() == list(range(16 - N_BIRTH))
 
 
+@pytest.mark.filterwarnings("ignore:max_labels = 4")
 def test_an_update_over_capacity_keeps_the_heaviest_children_unscaled(monkeypatch):
     """Six components near three detections have 24 children, more than the 11 that fit: the
     pool fills to exactly 11 (16 after the next births) and holds the 11 heaviest, as they
@@ -151,7 +159,8 @@ def test_an_update_over_capacity_keeps_the_heaviest_children_unscaled(monkeypatc
         return select(flat)
 
     monkeypatch.setattr(f, "_select", spy)
-    f._update(z, f.measurement.observed(z), np.ones(3))
+    with pytest.warns(RuntimeWarning, match="capacity = 16"):
+        f._update(z, f.measurement.observed(z), np.ones(3))
     children = seen["flat"]
     assert (children > f.config.prune_mass).sum() > 16 - N_BIRTH
     assert f.n == 16 - N_BIRTH
@@ -336,12 +345,14 @@ def test_labels_go_to_the_strongest_above_label_min_existence():
 
 
 def test_the_weakest_labels_are_recycled_when_slots_run_out():
+    """Under a hard max_labels the strongest keep their labels, and the cut is reported."""
     f = make(max_labels=2)
     f.slot_used[:] = True
     mass = np.array([0.9, 0.2, 0.6, 0.1])
     label = np.array([0, 1, -1, -1])
     newborn = np.array([-1, -1, 0, 1])
-    out = f._assign_labels(mass, label, newborn, 2)
+    with pytest.warns(RuntimeWarning, match="max_labels = 2 .* 4 Bernoullis .* the 2 weakest"):
+        out = f._assign_labels(mass, label, newborn, 2)
     assert out.tolist() == [0, -1, 1, -1]  # r 0.9 and 0.6 keep slots, 0.2 and 0.1 go
     assert f.slot_used.tolist() == [True, True]
 

@@ -85,6 +85,7 @@ def test_hidden_pedestrian_keeps_its_label_with_occlusion(seed):
         assert existence.mean() > plain.mean() + 0.1
 
 
+@pytest.mark.filterwarnings("ignore:max_labels = 24")  # hard limits on purpose
 def test_existence_in_unit_interval_and_labels_unique():
     scene = crowd_scene(Crowd(people=20, frames=160), seed=3)
     tracker = Tracker(TrackerConfig(occlusion="measurement-wise", capacity=512,
@@ -256,7 +257,8 @@ def test_step_rejects_bad_boxes():
 def test_config_defaults_follow_the_paper():
     assert TrackerConfig(occlusion="none").stationary_detectability == 0.9
     c = TrackerConfig()
-    assert (c.stationary_detectability, c.capacity, c.max_labels) == (0.93, 2048, 72)
+    assert c.stationary_detectability == 0.93
+    assert (c.capacity, c.max_labels) == (0, 0)  # grow with the scene (the paper: 2048, 72)
     assert c.edge_noise * 175 == pytest.approx(12.0, abs=0.1)  # 12 px at MOT17-04's median
     assert (c.occludability, c.occludability_ratio, c.report_existence) == (0.8, 0.8, 0.5)
     assert c.dt == pytest.approx(1 / 30)  # every frame

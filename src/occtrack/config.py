@@ -49,8 +49,10 @@ class TrackerConfig:
     camera_motion: str = "detections"  # estimate the camera's shift from the detections, or
     # "none" (a still camera); a per-frame motion given to Tracker.step always wins
 
-    capacity: int = 2048  # Gaussian components kept, all objects and the Poisson part
-    max_labels: int = 72  # labelled Bernoullis kept; the weakest are recycled
+    # 0: grow with the scene (arrays double when full; memory follows the people in view, not
+    # the time); a positive number is a hard limit, reported once (a warning) when it bites:
+    capacity: int = 0  # Gaussian components, all objects and the Poisson part (paper: 2048)
+    max_labels: int = 0  # labelled Bernoullis; past the limit the weakest are recycled (paper: 72)
     report_existence: float = 0.5  # report an object when r exceeds this
 
     # lengths below are in units of the box's own height h (h of the component's mean box)
@@ -109,6 +111,12 @@ class TrackerConfig:
     merge_velocity: float = 0.057  # h / s
     lbp_tolerance: float = 1e-7  # stop loopy BP when messages change less than this
     lbp_max_iterations: int = 200
+    # association, likelihoods and occlusion only over the pairs that can interact: a
+    # (component, detection) pair more than gate_sigmas standard deviations apart on a box edge
+    # is skipped (its likelihood is below e^(-gate_sigmas^2 / 2) of the component's best), and
+    # loopy BP runs cluster by cluster; false computes every pair (for checking)
+    gating: bool = True
+    gate_sigmas: float = 9.0
 
     def __post_init__(self) -> None:
         self.validate()
@@ -144,7 +152,8 @@ class TrackerConfig:
                     "birth_speed_std": self.birth_speed_std, "prune_mass": self.prune_mass,
                     "merge_position": self.merge_position, "merge_velocity": self.merge_velocity,
                     "lbp_tolerance": self.lbp_tolerance, "occlusion_gain": self.occlusion_gain,
-                    "clutter_rate": self.clutter_rate, "score_floor": self.score_floor}
+                    "clutter_rate": self.clutter_rate, "score_floor": self.score_floor,
+                    "gate_sigmas": self.gate_sigmas}
         for name, value in positive.items():
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number, not {value}")
@@ -182,10 +191,12 @@ class TrackerConfig:
         if not 1 <= self.confirm_hits <= self.confirm_window:
             raise ValueError(f"confirm_hits must be between 1 and confirm_window "
                              f"({self.confirm_window}), not {self.confirm_hits}")
-        if self.max_labels < 1:
-            raise ValueError(f"max_labels must be at least 1, not {self.max_labels}")
-        if self.capacity < 16:
-            raise ValueError(f"capacity must be at least 16 components, not {self.capacity}")
+        if self.max_labels < 0:
+            raise ValueError(f"max_labels must be at least 1, or 0 to grow with the scene, not "
+                             f"{self.max_labels}")
+        if self.capacity != 0 and self.capacity < 16:
+            raise ValueError(f"capacity must be at least 16 components, or 0 to grow with the "
+                             f"scene, not {self.capacity}")
         if self.max_components_per_object < 0:
             raise ValueError("max_components_per_object must be 0 (no limit) or more")
         if self.lbp_max_iterations < 1:

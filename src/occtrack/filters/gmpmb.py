@@ -51,13 +51,28 @@ this honest on real detections:
   `report_coast_time` and its centre is known to within `report_centre_std` box heights; it
   is kept, unreported, for as long as m holds its existence, so its label survives.
 
-Then the heaviest `capacity` children are kept (lighter than `prune_mass` dropped); each
-Bernoulli keeps at most its `max_components_per_object` heaviest, rescaled so that its existence
-is unchanged (only the tail of its density goes); the `max_labels` strongest Bernoullis keep a
-label and the rest, with those below `label_min_existence`, are recycled into the Poisson part
-(their components lose the label, their mass becomes intensity); components of one object that
-fall in the same small cell of state space are merged by moment matching. Every array has a
-fixed capacity, so memory stays flat however long the sequence.
+Then the children lighter than `prune_mass` are dropped; each Bernoulli keeps at most its
+`max_components_per_object` heaviest, rescaled so that its existence is unchanged (only the
+tail of its density goes); Bernoullis below `label_min_existence` are recycled into the Poisson
+part (their components lose the label, their mass becomes intensity); components of one object
+that fall in the same small cell of state space are merged by moment matching. The pool and the
+label slots grow with the scene (arrays double when full), so memory follows the number of
+people in view and stays flat however long the sequence. A positive `capacity` or `max_labels`
+is a hard limit instead (the heaviest children, the strongest Bernoullis are kept), and the
+first time it bites a warning says how many were cut.
+
+Gating: a component and a detection can associate only if the detection's box overlaps the
+component's gate (its predicted box widened by `gate_sigmas` edge standard deviations, one gate
+per object: the union of its components'), found by a sweep (`occtrack.spatial`), so the
+likelihoods, the sums L_ij and loopy BP (cluster by cluster, `lbp_sparse`) cost what the pairs
+that can interact cost. A pair outside the gate has a likelihood below e^(-gate_sigmas^2 / 2)
+of the component's best (with the default 9, e^-40: times the largest ratio of a component's
+peak density to the clutter density, about 1e6, still far below `prune_mass` for any child it
+could give). An association edge with L_ij < EDGE_FLOOR miss_i w_new_j cannot reach
+p_hit_ij = EDGE_FLOOR (1e-9), so its hit children fall below `prune_mass` whatever loopy BP
+says; leaving such edges out splits a crowd's graph into the clusters that really compete.
+`gating = false` computes every pair and keeps every edge, to check that nothing moves
+(benchmarks/bench_gating.py: no MOT17 metric moves).
 
 Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
 pluggable miss term.
@@ -65,18 +80,24 @@ pluggable miss term.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from occtrack.association import lbp_marginals
+from occtrack.association import lbp_sparse
 from occtrack.config import TrackerConfig
 from occtrack.models.birth import EdgeBirths
 from occtrack.models.box import BoxMeasurement, heights
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import OcclusionContext, OcclusionModel
+from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
 
 N_BIRTH = 5
 LOG_FLOOR = -300.0
+EDGE_FLOOR = 1e-9  # gating: association edges that cannot reach this p_hit are left out
+INITIAL_POOL = 256  # components, when the pool grows with the scene
+INITIAL_SLOTS = 32  # label slots, likewise
 
 
 class GaussianMixturePMB:
@@ -93,7 +114,8 @@ class GaussianMixturePMB:
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
         self.image_size = np.asarray(c.image_size, dtype=float)
-        cap, L = c.capacity, c.max_labels
+        cap = c.capacity or INITIAL_POOL
+        L = c.max_labels or INITIAL_SLOTS
         self.n = 0
         self.mass = np.zeros(cap)
         self.mean = np.zeros((cap, 2, 3))
@@ -121,6 +143,43 @@ class GaussianMixturePMB:
         self.iterations = 0  # loopy BP iterations of the last step
         # running sums of detected half-sizes (count, sum, sum of squares) for the birth prior
         self._size_stats = np.zeros((3, 2))
+        self._warned: set[str] = set()  # hard limits already reported
+
+    # -- storage --------------------------------------------------------------------------
+
+    _POOL = ("mass", "mean", "cov", "det", "occ", "label", "coast")
+    _SLOTS = ("slot_used", "slot_age", "slot_hits", "slot_coast", "slot_detection",
+              "slot_serial", "slot_class", "slot_hidden")
+
+    def _reserve(self, size: int) -> None:
+        """Room for `size` components: the pool's arrays at least double when they grow."""
+        if size <= len(self.mass):
+            return
+        new = max(size, 2 * len(self.mass))
+        fill = {"label": -1}
+        for name in self._POOL:
+            old = getattr(self, name)
+            arr = np.full((new,) + old.shape[1:], fill.get(name, 0), dtype=old.dtype)
+            arr[:self.n] = old[:self.n]
+            setattr(self, name, arr)
+
+    def _reserve_slots(self, size: int) -> None:
+        """Room for `size` label slots, likewise; a new slot is unused."""
+        old_size = len(self.slot_used)
+        if size <= old_size:
+            return
+        new = max(size, 2 * old_size)
+        fill = {"slot_detection": -1, "slot_serial": -1}
+        for name in self._SLOTS:
+            old = getattr(self, name)
+            arr = np.full(new, fill.get(name, 0), dtype=old.dtype)
+            arr[:old_size] = old
+            setattr(self, name, arr)
+
+    def _warn_once(self, what: str, message: str) -> None:
+        if what not in self._warned:
+            self._warned.add(what)
+            warnings.warn(message, RuntimeWarning, stacklevel=4)
 
     # -- public -------------------------------------------------------------------------
 
@@ -253,6 +312,7 @@ class GaussianMixturePMB:
                                                    size_mean, size_std, 2.0 * size_mean[1])
         keep = mass > 0
         b = int(keep.sum())
+        self._reserve(self.n + b)
         s = slice(self.n, self.n + b)
         self.mass[s], self.mean[s], self.cov[s] = mass[keep], means[keep], covs[keep]
         self.det[s] = c.birth_detectability
@@ -290,26 +350,6 @@ class GaussianMixturePMB:
 
         seen_hidden = np.zeros(M) if terms.seen_hidden is None else np.clip(
             terms.seen_hidden, 0.0, 1.0)
-        hit = np.zeros((n, M))
-        if M:
-            log_hit = self.measurement.loglik(mean, cov, z, observed)
-            if seen_hidden.any():
-                # a source not yet confirmed is weighed like clutter, with the stationary o:
-                # were it taken as never occludable, a detection in a crowd would start a new
-                # track more easily than it is called clutter
-                o_seen = np.where(established, occ, c.occludability)
-                seen = det[:, None] * (1.0 - o_seen[:, None]
-                                       + (o_seen * v)[:, None] * (1.0 - seen_hidden))
-                log_hit += np.log(np.maximum(mass[:, None] * seen, 1e-300))
-            else:
-                log_hit += np.log(np.maximum(mass * pd, 1e-300))[:, None]
-            # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
-            # which are slow to compute with, out of the arrays
-            np.exp(log_hit, out=hit, where=log_hit > LOG_FLOOR)
-            if classes is not None:  # an object never takes a detection of another class
-                other = self.slot_class[np.maximum(label, 0)][:, None] != classes[None, :]
-                hit[(label >= 0)[:, None] & other] = 0.0
-
         # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
         # sorted by label, so each object's sums are sums over one contiguous run
         slots = np.flatnonzero(self.slot_used)
@@ -317,12 +357,32 @@ class GaussianMixturePMB:
         row_of_slot = np.full(L, A, dtype=np.int64)
         row_of_slot[slots] = np.arange(A)
         rows = np.where(label >= 0, row_of_slot[np.maximum(label, 0)], A)
-        L_hit = np.zeros((A + 1, M))
+
+        # hit weights l_kj of the pairs (component pk, detection pj) that can associate
+        pk, pj, log_hit, cand = self._pairs(mean, cov, z, observed, rows, A)
+        if len(pk):
+            if seen_hidden.any():
+                # a source not yet confirmed is weighed like clutter, with the stationary o:
+                # were it taken as never occludable, a detection in a crowd would start a new
+                # track more easily than it is called clutter
+                o_seen = np.where(established, occ, c.occludability)[pk]
+                seen = det[pk] * (1.0 - o_seen + o_seen * v[pk] * (1.0 - seen_hidden[pj]))
+                log_hit += np.log(np.maximum(mass[pk] * seen, 1e-300))
+            else:
+                log_hit += np.log(np.maximum(mass * pd, 1e-300))[pk]
+        # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
+        # which are slow to compute with, out of the arrays
+        possible = log_hit > LOG_FLOOR
+        if classes is not None and len(pk):  # an object never takes a detection of another class
+            lab = label[pk]
+            possible &= (lab < 0) | (self.slot_class[np.maximum(lab, 0)] == classes[pj])
+        pk, pj, hit = pk[possible], pj[possible], np.exp(log_hit[possible])
+        cand_of_pair = None if cand is None else cand[2][possible]
+
         r_obj = np.zeros(A + 1)
         miss_mass = np.zeros(A + 1)
         if n:
             starts = np.flatnonzero(np.diff(rows, prepend=-1))
-            L_hit[rows[starts]] = np.add.reduceat(hit, starts, axis=0)
             r_obj[rows[starts]] = np.add.reduceat(mass, starts)
             miss_mass[rows[starts]] = np.add.reduceat(mass * miss, starts)
             hidden_mass = np.add.reduceat(mass * det * occ * (1.0 - v + v * q), starts)
@@ -331,29 +391,52 @@ class GaussianMixturePMB:
             self.slot_hidden[slots[rows[starts][inside]]] = hidden_mass[inside] / np.maximum(
                 miss_mass[rows[starts][inside]], 1e-300)
         r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
+        # L_ij = sum_{k in i} l_kj on the object-detection pairs (edges), L_0j of the Poisson part
+        prow = rows[pk]
+        mine = prow < A
+        poisson_hit = np.bincount(pj[~mine], weights=hit[~mine], minlength=M)
+        if cand is None:  # every (object, detection) pair is a candidate edge
+            cand_row, cand_col = np.divmod(np.arange(A * M), max(M, 1))
+            cand_of_pair = prow * M + pj
+        else:
+            cand_row, cand_col = cand[0], cand[1]
+        L_cand = np.bincount(cand_of_pair[mine], weights=hit[mine], minlength=len(cand_row))
+        live = L_cand > 0
+        e_row, e_col, L_edge = cand_row[live], cand_col[live], L_cand[live]
+        edge_of_pair = (np.cumsum(live) - 1)[cand_of_pair[mine]]
         W, H = self.image_size
         size = np.maximum((z[:, :, 1] - z[:, :, 0]).prod(axis=1), 1.0)
         clutter = c.clutter_rate / (W * H * size) * np.clip(scores, c.score_floor, 1.0) ** (
             -c.clutter_score_power) * (1.0 - c.occludability * seen_hidden)
-        w_new = clutter + L_hit[A]
+        w_new = clutter + poisson_hit
 
-        marg = lbp_marginals(L_hit[:A], miss_obj, w_new, tol=c.lbp_tolerance,
-                             max_iter=c.lbp_max_iterations)
+        # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
+        # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
+        # such edges out (gating) splits a crowd's graph into the clusters that really compete
+        strong = (L_edge >= EDGE_FLOOR * miss_obj[e_row] * w_new[e_col]) if c.gating else (
+            np.ones(len(L_edge), dtype=bool))
+        marg = lbp_sparse(e_row[strong], e_col[strong], L_edge[strong], miss_obj, w_new,
+                          tol=c.lbp_tolerance, max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
-        self._count_detections(slots, marg.p_hit)
+        self._count_detections(slots, e_row[strong], e_col[strong], marg.p_hit)
 
-        hit_factor = np.zeros((A + 1, M))
-        np.divide(marg.p_hit, L_hit[:A], out=hit_factor[:A], where=L_hit[:A] > 0)
-        hit_factor[A] = marg.p_new / w_new
+        hit_factor = (marg.p_new / w_new)[pj]
+        edge_factor = np.zeros(len(L_edge))
+        edge_factor[strong] = marg.p_hit / L_edge[strong]
+        hit_factor[mine] = edge_factor[edge_of_pair]
         miss_factor = np.append(marg.p_miss / miss_obj, 1.0)
-        children = np.empty((n, M + 1))
-        children[:, 0] = mass * miss * miss_factor[rows]
-        np.multiply(hit, hit_factor[rows], out=children[:, 1:])
+        # children: one miss child per component, then one hit child per pair
+        children = np.concatenate([mass * miss * miss_factor[rows], hit * hit_factor])
 
-        keep = self._select(children.ravel())
-        parent, j = np.divmod(keep, M + 1)
-        j -= 1
-        new_mass = children.ravel()[keep]
+        keep = self._select(children)
+        missed = keep < n
+        pair = np.where(missed, 0, keep - n)
+        parent = np.where(missed, keep, pk[pair] if len(pk) else 0)
+        j = np.where(missed, -1, pj[pair] if len(pj) else 0)
+        # in the order of the parents, a miss child before its hit children
+        order = np.argsort(parent * (M + 1) + j + 1, kind="stable")
+        keep, parent, j = keep[order], parent[order], j[order]
+        new_mass = children[keep]
         if c.max_components_per_object:
             trim = self._trim_objects(new_mass, label[parent], j)
             keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
@@ -385,6 +468,8 @@ class GaussianMixturePMB:
         alive = self._confirm_or_delete(new_label)
 
         k = int(alive.sum())
+        self.n = 0  # (nothing of the old pool is kept)
+        self._reserve(k)
         self.n = k
         self.mass[:k], self.mean[:k], self.cov[:k] = (new_mass[alive], new_mean[alive],
                                                        new_cov[alive])
@@ -392,14 +477,49 @@ class GaussianMixturePMB:
         self.coast[:k], self.label[:k] = new_coast[alive], new_label[alive]
         self._cap_existence()
 
-    def _count_detections(self, slots: np.ndarray, p_hit: np.ndarray) -> None:
-        """Per-slot bookkeeping of this step's association: an object took detection j when
-        p_hit_ij > 1/2 (at most one j can)."""
+    def _pairs(self, mean: np.ndarray, cov: np.ndarray, z: np.ndarray, observed: np.ndarray,
+               rows: np.ndarray, A: int):
+        """The (component, detection) pairs that can associate and log p(z_j | x_k) on them:
+        (pk, pj, loglik, candidates). Small problems and `gating = false` list every pair
+        (candidates None: every (object, detection) pair may be an edge). Otherwise the pairs
+        whose gates overlap: one gate per object row (the union of its components' gates, so
+        each object is looked up once), one per Poisson component; candidates are then the
+        (object row, detection) pairs found, (row, column, candidate of each listed pair)."""
+        n, M = len(mean), len(z)
+        c = self.config
+        zhat, S = self.measurement.innovation(mean, cov)
+        if not c.gating or n * M <= DENSE_PAIRS:
+            pk, pj = np.repeat(np.arange(n), M), np.tile(np.arange(M), n)
+            return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), None
+        gates = self.measurement.gates(zhat, S, c.gate_sigmas)
+        first = np.ones(n, dtype=bool)
+        first[1:] = (rows[1:] != rows[:-1]) | (rows[1:] == A)
+        start = np.flatnonzero(first)
+        size = np.diff(np.append(start, n))
+        unit_gates = np.stack([np.minimum.reduceat(gates[..., 0], start),
+                               np.maximum.reduceat(gates[..., 1], start)], axis=-1)
+        boxes = z
+        unmeasured = ~observed.any(axis=2)  # both edges of an axis on the border: no gate
+        if unmeasured.any():
+            boxes = z.copy()
+            boxes[unmeasured] = [-np.inf, np.inf]
+        ui, uj = overlapping_pairs(unit_gates, boxes)
+        count = size[ui]
+        total = int(count.sum())
+        cand_of_pair = np.repeat(np.arange(len(ui)), count)
+        pk = np.repeat(start[ui] - (np.cumsum(count) - count), count) + np.arange(total)
+        pj = uj[cand_of_pair]
+        loglik = self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj)
+        return pk, pj, loglik, (rows[start[ui]], uj, cand_of_pair)
+
+    def _count_detections(self, slots: np.ndarray, row: np.ndarray, col: np.ndarray,
+                          p_hit: np.ndarray) -> None:
+        """Per-slot bookkeeping of this step's association: an object (row of `slots`) took
+        detection j when p_hit_ij > 1/2 (at most one j can); p_hit is given on the pairs
+        (row, col)."""
         self.slot_detection[:] = -1
-        if len(slots) and p_hit.shape[1]:
-            best = p_hit.argmax(axis=1)
-            took = p_hit[np.arange(len(slots)), best] > 0.5
-            self.slot_detection[slots[took]] = best[took]
+        took = p_hit > 0.5
+        self.slot_detection[slots[row[took]]] = col[took]
         used = self.slot_used
         hit = self.slot_detection >= 0
         self.slot_age[used] += 1
@@ -430,12 +550,21 @@ class GaussianMixturePMB:
             arr[:n] = arr[:n][order]
 
     def _select(self, flat: np.ndarray) -> np.ndarray:
-        """Indices (sorted) of the heaviest children above the pruning mass, leaving room for
-        the next step's births."""
-        room = self.config.capacity - N_BIRTH
+        """Indices (sorted) of the children above the pruning mass; under a hard `capacity`
+        the heaviest of them, leaving room for the next step's births (the first time it
+        bites, a warning gives the count)."""
         keep = np.flatnonzero(flat > self.config.prune_mass)
-        if len(keep) > room:
-            keep = keep[np.argpartition(-flat[keep], room - 1)[:room]]
+        capacity = self.config.capacity
+        room = capacity - N_BIRTH
+        if capacity and len(keep) > room:
+            order = np.argpartition(-flat[keep], room - 1)
+            lost = flat[keep[order[room:]]]
+            self._warn_once("capacity", (
+                f"capacity = {capacity} Gaussian components reached at step {self.steps + 1}: "
+                f"{len(keep)} were above prune_mass, the {len(lost)} lightest (mass up to "
+                f"{lost.max():.3g}) were dropped; set capacity = 0 to let the pool grow with "
+                f"the scene (reported once)"))
+            keep = keep[order[:room]]
             keep.sort()
         return keep
 
@@ -467,8 +596,11 @@ class GaussianMixturePMB:
 
     def _assign_labels(self, mass: np.ndarray, label: np.ndarray, newborn: np.ndarray,
                        M: int, classes: np.ndarray | None = None) -> np.ndarray:
-        """Keep the `max_labels` strongest Bernoullis (existing and new) above the label
-        threshold; recycle the others into the Poisson part."""
+        """Keep a label for every Bernoulli (existing and new) above the label threshold
+        (under a hard `max_labels`, for the strongest that many: the first time that recycles
+        one above the threshold, a warning gives the count); recycle the others into the
+        Poisson part."""
+        limit = self.config.max_labels
         L = len(self.slot_used)
         lab = label >= 0
         r_old = np.bincount(label[lab], weights=mass[lab], minlength=L)
@@ -479,7 +611,17 @@ class GaussianMixturePMB:
         r_all = np.concatenate([r_old[old], r_new[new]])
         eligible = r_all >= self.config.label_min_existence
         ranked = np.argsort(-r_all, kind="stable")
-        ranked = ranked[eligible[ranked]][:L]
+        ranked = ranked[eligible[ranked]]
+        if limit and len(ranked) > limit:
+            lost = r_all[ranked[limit:]]
+            self._warn_once("labels", (
+                f"max_labels = {limit} reached at step {self.steps + 1}: {len(ranked)} "
+                f"Bernoullis held existence >= {self.config.label_min_existence:g}, the "
+                f"{len(lost)} weakest (existence up to {lost.max():.3g}, "
+                f"{int((lost > self.config.report_existence).sum())} of them reported) were "
+                f"recycled into the Poisson part and lose their tracks; set max_labels = 0 to "
+                f"let labels grow with the scene (reported once)"))
+            ranked = ranked[:limit]
         keep_old = np.zeros(len(old), dtype=bool)
         keep_old[ranked[ranked < len(old)]] = True
         keep_new = ranked[ranked >= len(old)] - len(old)
@@ -492,6 +634,7 @@ class GaussianMixturePMB:
             gone[dropped] = True
             label = np.where(lab & gone[np.maximum(label, 0)], -1, label)
         if len(keep_new):
+            self._reserve_slots(int(self.slot_used.sum()) + len(keep_new))
             free = np.flatnonzero(~self.slot_used)[:len(keep_new)]
             self.slot_used[free] = True
             slot_of_meas = np.full(M, -1, dtype=np.int64)
@@ -519,26 +662,50 @@ class GaussianMixturePMB:
         cell = np.array([c.merge_position, c.merge_velocity, c.merge_position] * 2)
         cells = np.floor(mean.reshape(-1, 6) / (cell * np.exp2(octave)[:, None])).astype(
             np.int64)
-        cells = np.concatenate([octave[:, None], cells], axis=1)
-        order = np.lexsort([cells[:, i] for i in range(6, -1, -1)] + [label])
-        key = np.concatenate([label[order, None], cells[order]], axis=1)
-        start = np.ones(len(order), dtype=bool)
-        start[1:] = (key[1:] != key[:-1]).any(axis=1)
+        key = np.concatenate([label[:, None], octave[:, None], cells], axis=1)
+        # one integer per cell (mixed radix, label first) when it fits: one sort instead of
+        # lexsort's eight, the same order
+        low = key.min(axis=0)
+        span = key.max(axis=0) - low + 1
+        if np.log2(span.astype(float)).sum() < 62:
+            radix = np.append(np.cumprod(span[::-1])[::-1][1:], 1)
+            packed = (key - low) @ radix
+            order = np.argsort(packed, kind="stable")
+            packed = packed[order]
+            start = np.ones(len(order), dtype=bool)
+            start[1:] = packed[1:] != packed[:-1]
+        else:
+            order = np.lexsort(key.T[::-1])
+            key = key[order]
+            start = np.ones(len(order), dtype=bool)
+            start[1:] = (key[1:] != key[:-1]).any(axis=1)
         if start.all():
             return mass, mean, cov, det, occ, coast, label
         first = np.flatnonzero(start)
-        group = np.cumsum(start) - 1
-        m = mass[order]
-        total = np.add.reduceat(m, first)
+        # a component alone in its cell is its own moment match (share 1, no spread): only
+        # the cells holding several are pooled
+        size = np.diff(np.append(first, len(order)))
+        pooled = size > 1
+        member = np.repeat(pooled, size)
+        sub = order[member]
+        sub_first = np.cumsum(np.append(0, size[pooled][:-1]))
+        group = np.repeat(np.arange(len(sub_first)), size[pooled])
+        m = mass[sub]
+        total = np.add.reduceat(m, sub_first)
         share = m / total[group]
-        mu = np.add.reduceat(share[:, None, None] * mean[order], first)
-        dev = mean[order] - mu[group]
-        spread = cov[order] + dev[..., :, None] * dev[..., None, :]
-        sigma = np.add.reduceat(share[:, None, None, None] * spread, first)
-        d = np.add.reduceat(share * det[order], first)
-        o = np.add.reduceat(share * occ[order], first)
-        t = np.add.reduceat(share * coast[order], first)
-        return total, mu, sigma, d, o, t, label[order][first]
+        mu = np.add.reduceat(share[:, None, None] * mean[sub], sub_first)
+        dev = mean[sub] - mu[group]
+        spread = cov[sub] + dev[..., :, None] * dev[..., None, :]
+        sigma = np.add.reduceat(share[:, None, None, None] * spread, sub_first)
+        alone = order[first[~pooled]]
+        out = [np.empty((len(first),) + a.shape[1:], dtype=a.dtype)
+               for a in (mass, mean, cov, det, occ, coast)]
+        for arr, mixed, source in zip(out[:3], (total, mu, sigma), (mass, mean, cov), strict=True):
+            arr[pooled], arr[~pooled] = mixed, source[alone]
+        for arr, source in zip(out[3:], (det, occ, coast), strict=True):
+            arr[pooled] = np.add.reduceat(share * source[sub], sub_first)
+            arr[~pooled] = source[alone]
+        return (*out, label[order][first])
 
     def _cap_existence(self) -> None:
         """Guard against r exceeding 1 by rounding: scale such an object's masses down."""

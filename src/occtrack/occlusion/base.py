@@ -31,7 +31,8 @@ class OcclusionContext:
     means / covs: predicted component states (covs None for particles); weights: each
     component's weight within its object; owner: the object index of each component (-1 for the
     Poisson part); existence: r of each object; measurements: this step's visible measurements;
-    measurement_model: the model that maps states to measurements.
+    measurement_model: the model that maps states to measurements; gating: whether a model may
+    look only at pairs that can interact (True), or must build full tables (for checking).
     """
 
     means: np.ndarray
@@ -41,6 +42,7 @@ class OcclusionContext:
     existence: np.ndarray
     measurements: np.ndarray
     measurement_model: Any = None
+    gating: bool = True
 
 
 @dataclass(frozen=True)

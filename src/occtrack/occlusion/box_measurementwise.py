@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from occtrack.occlusion.base import OcclusionContext, OcclusionTerms
-from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, combine
+from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 
 
 class MeasurementWise:
@@ -38,11 +38,9 @@ class MeasurementWise:
         hidden = np.zeros(k)
         if k:
             boxes = ctx.measurement_model.predicted_edges(ctx.means)
-            hidden = combine(self.geometry(boxes, z))
-        return OcclusionTerms(np.ones(k), hidden, self.seen_hidden(z))
+            hidden = 1.0 - self.geometry.visible(boxes, z, sparse=ctx.gating)
+        return OcclusionTerms(np.ones(k), hidden, self.seen_hidden(z, ctx.gating))
 
-    def seen_hidden(self, z: np.ndarray) -> np.ndarray:
+    def seen_hidden(self, z: np.ndarray, sparse: bool = True) -> np.ndarray:
         """h_j: how surely the other visible measurements would have hidden z_j."""
-        p = self.geometry(z, z)
-        np.fill_diagonal(p, 0.0)
-        return combine(p)
+        return 1.0 - self.geometry.visible(z, z, skip=np.arange(len(z)), sparse=sparse)

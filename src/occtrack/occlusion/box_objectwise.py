@@ -34,9 +34,12 @@ class ObjectWiseExpectedValue:
             return OcclusionTerms(np.ones(k), np.zeros(k))
         boxes = ctx.measurement_model.predicted_edges(ctx.means)
         mean_boxes = _mean_boxes(boxes, ctx.weights, ctx.owner, len(r))[occluders]
-        p = self.geometry(boxes, mean_boxes) * r[occluders]
-        p[ctx.owner[:, None] == occluders[None, :]] = 0.0
-        return OcclusionTerms(np.prod(1.0 - p, axis=1), np.zeros(k))
+        position = np.full(len(r) + 1, -1)  # an object's place among the occluders
+        position[occluders] = np.arange(len(occluders))
+        own = position[ctx.owner]  # (the Poisson part, owner -1, reads the last: -1)
+        visible = self.geometry.visible(boxes, mean_boxes, weights=r[occluders], skip=own,
+                                        sparse=ctx.gating)
+        return OcclusionTerms(visible, np.zeros(k))
 
 
 def _mean_boxes(boxes: np.ndarray, weights: np.ndarray, owner: np.ndarray,

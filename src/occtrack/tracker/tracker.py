@@ -153,7 +153,7 @@ class Tracker:
         """Forget every object and start again (ids start again at 1)."""
         c = self.config
         self.filter = GaussianMixturePMB(c, self.occlusion)
-        L = c.max_labels
+        L = len(self.filter.slot_used)  # per label slot, growing with the filter's
         self._reported_serial = np.full(L, -1, dtype=np.int64)
         self._report_id = np.zeros(L, dtype=np.int64)
         self._next_id = 1
@@ -253,6 +253,10 @@ class Tracker:
         shown where nobody is costs more than one left out). Boxes are left, top, width,
         height."""
         f, c = self.filter, self.config
+        grow = len(f.slot_used) - len(self._report_id)
+        if grow > 0:
+            self._reported_serial = np.append(self._reported_serial, np.full(grow, -1))
+            self._report_id = np.append(self._report_id, np.zeros(grow, dtype=np.int64))
         r, means, centre_std = f.object_moments()
         took = f.slot_detection
         height = np.maximum(2.0 * means[:, 1, 2], 1.0)

@@ -1,0 +1,157 @@
+"""occtrack's per-frame cost against ByteTrack's, on real detections and in crowds.
+
+    python benchmarks/bench_vs_bytetrack.py [--data DIR] [--repeats 3] [--people 50,200,400]
+
+Both trackers get the same detections, every frame, and only the per-frame call is timed, in
+CPU time of this process (the machine may be shared: other work slows the wall clock, not the
+CPU time): occtrack's `Tracker.step(boxes, scores)` against `trackers` 2.6.1
+`ByteTrackTracker.update(detections)` with library defaults and the sequence's frame rate, the
+`supervision.Detections` built beforehand. The trackers run in turn, one whole sequence each,
+`--repeats` rounds, and the fastest round of each counts, so that a burst of load on the
+machine hits both alike; the ratios are measured in this one run.
+
+1. MOT17-04 and MOT17-11, the public FRCNN detections (`--data`, else $OCCTRACK_DATA or
+   ../shared/data/mot17): frames per second of occtrack under each occlusion model and of
+   ByteTrack, and their ratio (target: at least 1).
+2. Crowds (`occtrack.scenarios.pedestrians`, seed 0): `people` walkers always in view of a
+   1920 x 1080 image, boxes 50 to 120 px tall (perspective: feet lower, box taller), P_D 0.9
+   for a person less than 70 % hidden, non-maximum suppression, 300 frames at 30 fps.
+   Tracks reported per frame as a % of the people in view (target 95-105 % for occtrack),
+   frames per second of both (target: occtrack at least ByteTrack's at 200 and 400 people),
+   and how many times the per-frame time grows from the smallest crowd to the largest
+   (target: at most 10).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from occtrack import peers
+from occtrack.io.data import find_sequence
+from occtrack.io.mot import read_mot, read_seqinfo
+from occtrack.scenarios.pedestrians import Crowd, Detector, crowd_scene
+from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig
+
+
+def crowd(people: int, frames: int = 300) -> Crowd:
+    """Boxes 50 px tall at the far edge (feet at row 130) to 120 px at the near one (row
+    1060), heights linear in the feet's row."""
+    far, near, short, tall = 130.0, 1060.0, 50.0, 120.0
+    per_px = (tall - short) / (near - far)
+    return Crowd(people=people, frames=frames, horizon=far - short / per_px,
+                 height_per_px=per_px, farthest_bottom=far, nearest_bottom=near,
+                 detector=Detector(p_detect=0.9))
+
+
+def frames_of(det, num_frames: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    return [(det.box[rows], det.score[rows]) for rows in det.frame_slices(num_frames)]
+
+
+def run_occtrack(frames, config: TrackerConfig) -> tuple[float, list[int]]:
+    """CPU seconds inside `step` over the whole sequence, and tracks reported per frame."""
+    tracker = Tracker(config)
+    spent, shown = 0.0, []
+    for boxes, scores in frames:
+        start = time.process_time()
+        tracks = tracker.step(boxes, scores)
+        spent += time.process_time() - start
+        shown.append(len(tracks))
+    return spent, shown
+
+
+def run_bytetrack(detections, fps: float) -> tuple[float, list[int]]:
+    _, trackers = peers.load()
+    tracker = trackers.ByteTrackTracker(frame_rate=fps)
+    spent, shown = 0.0, []
+    for frame in detections:
+        start = time.process_time()
+        out = tracker.update(frame)
+        spent += time.process_time() - start
+        ids = out.tracker_id
+        shown.append(0 if ids is None else int((ids >= 0).sum()))
+    return spent, shown
+
+
+def sv_frames(frames):
+    sv, _ = peers.load()
+    out = []
+    for boxes, scores in frames:
+        if len(boxes):
+            xyxy = np.concatenate([boxes[:, :2], boxes[:, :2] + boxes[:, 2:]], axis=1)
+            out.append(sv.Detections(xyxy=xyxy, confidence=scores.astype(float)))
+        else:
+            out.append(sv.Detections.empty())
+    return out
+
+
+def race(frames, size, fps: float, models, repeats: int) -> dict[str, tuple[float, list]]:
+    """Fastest of `repeats` rounds for each tracker, the trackers taking turns."""
+    detections = sv_frames(frames)
+    best: dict[str, tuple[float, list]] = {}
+    for _ in range(repeats):
+        for name in (*models, "bytetrack"):
+            if name == "bytetrack":
+                spent, shown = run_bytetrack(detections, fps)
+            else:
+                config = TrackerConfig(occlusion=name, image_size=size, fps=fps)
+                spent, shown = run_occtrack(frames, config)
+            if name not in best or spent < best[name][0]:
+                best[name] = (spent, shown)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", default=None, help="folder of the MOT17 sequence folders")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--people", default="50,200,400")
+    parser.add_argument("--frames", type=int, default=300, help="crowd frames")
+    parser.add_argument("--skip-mot17", action="store_true")
+    args = parser.parse_args()
+    peers.load()
+
+    if not args.skip_mot17:
+        print("Real detections, every frame, per-frame call in CPU time "
+              f"(fastest of {args.repeats} rounds):")
+        print(f"  {'sequence':<10}{'tracker':<18}{'frames/s':>10}{'ByteTrack':>11}{'ratio':>8}")
+        for name in ("MOT17-04-FRCNN", "MOT17-11-FRCNN"):
+            folder = find_sequence(args.data, name)
+            info = read_seqinfo(folder)
+            det = read_mot(folder / "det" / "det.txt", "det")
+            n, fps = int(info["length"]), float(info["fps"])
+            frames = frames_of(det, n)
+            best = race(frames, (int(info["width"]), int(info["height"])), fps,
+                        OCCLUSION_NAMES, args.repeats)
+            bt = n / best["bytetrack"][0]
+            for model in OCCLUSION_NAMES:
+                rate = n / best[model][0]
+                print(f"  {name[:8]:<10}{model:<18}{rate:>10.0f}{bt:>11.0f}{rate / bt:>8.2f}")
+
+    people = [int(p) for p in args.people.split(",")]
+    print(f"\nCrowds, 1920 x 1080, boxes 50-120 px tall, P_D 0.9, {args.frames} frames, "
+          "occtrack defaults (measurement-wise occlusion):")
+    print(f"  {'people':>6}{'dets/frame':>12}{'occtrack tracks':>17}{'ByteTrack tracks':>18}"
+          f"{'occtrack f/s':>14}{'ByteTrack f/s':>15}{'ratio':>7}")
+    per_frame = {}
+    for count in people:
+        scene = crowd_scene(crowd(count, args.frames), seed=0)
+        frames = frames_of(scene.detections, scene.frames)
+        best = race(frames, scene.image_size, scene.fps, ("measurement-wise",), args.repeats)
+        occ, bt = best["measurement-wise"], best["bytetrack"]
+        per_frame[count] = (occ[0] / scene.frames, bt[0] / scene.frames)
+        print(f"  {count:>6}{len(scene.detections) / scene.frames:>12.1f}"
+              f"{np.mean(occ[1]) / count:>16.1%}{np.mean(bt[1]) / count:>18.1%}"
+              f"{scene.frames / occ[0]:>14.0f}{scene.frames / bt[0]:>15.0f}"
+              f"{bt[0] / occ[0]:>7.2f}")
+    low, high = min(people), max(people)
+    if low != high:
+        print(f"  per-frame time from {low} to {high} people: occtrack "
+              f"{per_frame[high][0] / per_frame[low][0]:.1f} x, ByteTrack "
+              f"{per_frame[high][1] / per_frame[low][1]:.1f} x")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,201 @@
+"""Crowds: capacity that grows with the scene, hard limits that say so, and gating that
+changes nothing but the cost (sparse pairs, cluster-wise loopy BP, the sparse camera shift)."""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+import occtrack.association.lbp as lbp_module
+import occtrack.spatial as spatial
+import occtrack.tracker.camera as camera
+from occtrack.association import lbp_marginals, lbp_sparse
+from occtrack.densities import gaussian
+from occtrack.models.box import BoxMeasurement
+from occtrack.scenarios.pedestrians import Crowd, Detector, crowd_scene
+from occtrack.tracker import Tracker, TrackerConfig
+
+
+def crowd(people: int, frames: int, fps: float = 30.0) -> Crowd:
+    """1920 x 1080, boxes 50 px tall at the far edge to 120 px at the near one (the
+    benchmark's crowd, benchmarks/bench_vs_bytetrack.py)."""
+    per_px = 70.0 / 930.0
+    return Crowd(people=people, frames=frames, fps=fps, horizon=130.0 - 50.0 / per_px,
+                 height_per_px=per_px, farthest_bottom=130.0, nearest_bottom=1060.0,
+                 detector=Detector(p_detect=0.9))
+
+
+def frames_of(scene):
+    d = scene.detections
+    return [(d.box[rows], d.score[rows]) for rows in d.frame_slices(scene.frames)]
+
+
+def random_boxes(rng, n, wide_share=0.03):
+    centre = rng.uniform(0, 1000, (n, 2))
+    half = rng.uniform(1, 40, (n, 2))
+    half[rng.random(n) < wide_share] *= 25  # a few boxes much wider than the rest
+    return np.stack([centre - half, centre + half], axis=-1)
+
+
+# -- the building blocks equal their all-pairs forms ---------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_overlapping_pairs_are_exactly_the_overlapping_ones(seed):
+    rng = np.random.default_rng(seed)
+    a, b = random_boxes(rng, 300), random_boxes(rng, 250)
+    i, j = spatial.overlapping_pairs(a, b, dense_pairs=0)
+    truth = ((a[:, None, :, 0] < b[None, :, :, 1]) & (b[None, :, :, 0] < a[:, None, :, 1])).all(
+        axis=-1)
+    assert len(i) == truth.sum()
+    assert truth[i, j].all()
+    assert len(set(zip(i.tolist(), j.tolist(), strict=True))) == len(i)
+
+
+@pytest.mark.parametrize("clustered", [True, False])
+def test_sparse_loopy_bp_equals_the_dense_form(monkeypatch, clustered):
+    """Zero-weight pairs carry no message: BP on the listed pairs, cluster by cluster or as
+    one problem, reaches the dense form's marginals."""
+    monkeypatch.setattr(lbp_module, "CLUSTER_MIN_PAIRS", 0 if clustered else 10**9)
+    rng = np.random.default_rng(4)
+    for _ in range(30):
+        n, m = rng.integers(1, 30, 2)
+        mask = rng.random((n, m)) < 0.12
+        r = rng.uniform(0.05, 1.0, n)
+        w_hit = r[:, None] * rng.uniform(0, 1, (n, m)) * mask
+        w_miss, w_new = 1 - 0.9 * r, rng.uniform(0.01, 1.0, m)
+        dense = lbp_marginals(w_hit, w_miss, w_new, tol=1e-12, max_iter=10_000)
+        i, j = np.nonzero(w_hit)
+        sparse = lbp_sparse(i, j, w_hit[i, j], w_miss, w_new, tol=1e-12, max_iter=10_000)
+        np.testing.assert_allclose(sparse.p_hit, dense.p_hit[i, j], atol=1e-10)
+        np.testing.assert_allclose(sparse.p_miss, dense.p_miss, atol=1e-10)
+        np.testing.assert_allclose(sparse.p_new, dense.p_new, atol=1e-10)
+        if clustered and len(i):
+            count, _ = lbp_module.clusters_of(i, j, n, m)
+            assert sparse.clusters == count
+
+
+def test_pair_likelihoods_and_box_update_equal_the_general_forms():
+    """`loglik_pairs` gives `loglik`'s numbers, border edges included, and the written-out
+    box Kalman update equals the general Joseph-form update."""
+    rng = np.random.default_rng(1)
+    model = BoxMeasurement((1920, 1080), 0.069, 1.0)
+    K, M = 40, 30
+    means = np.zeros((K, 2, 3))
+    means[:, :, 0] = rng.uniform(-40, 1100, (K, 2))
+    means[:, :, 1] = rng.normal(0, 5, (K, 2))
+    means[:, :, 2] = rng.uniform(10, 90, (K, 2))
+    root = rng.normal(size=(K, 2, 3, 3))
+    covs = root @ np.swapaxes(root, -1, -2) * 20 + np.eye(3)
+    centre, half = rng.uniform(0, 1080, (M, 2)), rng.uniform(10, 100, (M, 2))
+    z = np.clip(np.stack([centre - half, centre + half], axis=-1), 0, 1080)
+    observed = model.observed(z)
+    assert not observed.all()
+    k, j = np.divmod(np.arange(K * M), M)
+    zhat, S = model.innovation(means, covs)
+    np.testing.assert_allclose(model.loglik_pairs(means, zhat, S, z, observed, k, j),
+                               model.loglik(means, covs, z, observed).ravel(), rtol=1e-10)
+    pairs = rng.integers(0, M, K)
+    new = model.update(means, covs, z[pairs], observed[pairs])
+    ref = gaussian.update(means, covs, model.H, model.R(means), z[pairs], observed[pairs])
+    np.testing.assert_allclose(new[0], ref[0], rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(new[1], ref[1], rtol=1e-10, atol=1e-9)
+
+
+def test_sparse_camera_shift_equals_the_all_pairs_one():
+    scene = crowd_scene(crowd(120, 12), seed=5)
+    frames = frames_of(scene)
+    rng = np.random.default_rng(0)
+    found = 0
+    for (previous, _), (current, _) in zip(frames, frames[1:], strict=False):
+        current = current + np.append(rng.normal(0, 6, 2), [0, 0])
+        assert len(previous) * len(current) > spatial.DENSE_PAIRS
+        sparse = camera.estimate_shift(previous, current)
+        old = camera.DENSE_PAIRS, camera.DENSE_VOTES
+        try:
+            camera.DENSE_PAIRS = camera.DENSE_VOTES = 10**12  # every pair, every vote
+            dense = camera.estimate_shift(previous, current)
+        finally:
+            camera.DENSE_PAIRS, camera.DENSE_VOTES = old
+        assert (sparse is None) == (dense is None)
+        if dense is not None:
+            found += 1
+            np.testing.assert_array_equal(sparse, dense)
+    assert found >= 8
+
+
+# -- the tracker ---------------------------------------------------------------------------
+
+
+def test_gated_and_ungated_runs_give_the_same_tracks(monkeypatch):
+    """Every step gated (no all-pairs shortcut for small problems) against every pair
+    computed: the same ids, boxes and existences up to rounding."""
+    monkeypatch.setattr("occtrack.filters.gmpmb.DENSE_PAIRS", 0)
+    monkeypatch.setattr(spatial, "DENSE_PAIRS", 0)
+    monkeypatch.setattr("occtrack.occlusion.box_geometry.DENSE_PAIRS", 0)
+    scene = crowd_scene(crowd(30, 60), seed=2)
+    for occlusion in ("measurement-wise", "object-wise"):
+        results = [Tracker(TrackerConfig(occlusion=occlusion, gating=gating)).run(
+            scene.detections, scene.frames) for gating in (True, False)]
+        gated, full = results
+        assert len(gated.id) > 1000
+        np.testing.assert_array_equal(gated.frame, full.frame)
+        np.testing.assert_array_equal(gated.id, full.id)
+        np.testing.assert_allclose(gated.box, full.box, atol=1e-6)
+        np.testing.assert_allclose(gated.existence, full.existence, atol=1e-9)
+
+
+def test_a_crowd_of_150_is_reported_whole_with_the_default_capacity():
+    """With the defaults (capacity and labels grow) every person can have a track: the old
+    fixed 72 labels cut such a crowd to 72 in silence."""
+    scene = crowd_scene(crowd(150, 45), seed=1)
+    tracker = Tracker(TrackerConfig())
+    shown = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no limit is hit, so nothing is said
+        for boxes, scores in frames_of(scene):
+            shown.append(len(tracker.step(boxes, scores)))
+            r = tracker.filter.existence()
+            assert ((r >= 0) & (r <= 1 + 1e-12)).all()
+    assert 0.9 * 150 <= np.mean(shown[15:]) <= 1.05 * 150
+    assert tracker.filter.slot_used.sum() >= 140
+    assert len(tracker._report_id) == len(tracker.filter.slot_used)
+
+
+@pytest.mark.parametrize("setting,limit,pattern", [
+    ("max_labels", 20, r"max_labels = 20 reached at step \d+: \d+ Bernoullis .* the \d+ weakest"),
+    ("capacity", 200, r"capacity = 200 Gaussian components reached at step \d+: \d+ were "),
+])
+def test_a_hard_limit_is_reported_once_with_the_count(setting, limit, pattern):
+    scene = crowd_scene(crowd(40, 20), seed=3)
+    tracker = Tracker(TrackerConfig(**{setting: limit}))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for boxes, scores in frames_of(scene):
+            tracks = tracker.step(boxes, scores)
+    said = [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    assert len(said) == 1
+    assert re.search(pattern, str(said[0].message))
+    if setting == "max_labels":
+        assert tracker.filter.slot_used.sum() <= limit and len(tracks) <= limit
+    else:
+        assert tracker.filter.n <= limit
+
+
+def test_the_pool_stays_bounded_over_a_long_run():
+    """Arrays grow while the scene fills, then stay: memory follows the people in view,
+    not the time."""
+    scene = crowd_scene(crowd(15, 1200, fps=15.0), seed=4)
+    tracker = Tracker(TrackerConfig(fps=15.0))
+    sizes = []
+    for index, (boxes, scores) in enumerate(frames_of(scene)):
+        tracker.step(boxes, scores)
+        if index % 100 == 99:
+            f = tracker.filter
+            sizes.append((len(f.mass), len(f.slot_used), f.n))
+    pool, slots, used = np.array(sizes).T
+    assert (pool[3:] == pool[3]).all() and (slots[3:] == slots[3]).all()
+    assert pool.max() <= 1024 and slots.max() <= 128 and used.max() <= 500
