@@ -36,6 +36,7 @@ COMMANDS = (
     "reproduce",
     "simulate",
     "simulate_detections",
+    "sweep",
     "track",
 )
 
