@@ -241,3 +241,17 @@ def test_command_prints_summary_and_dry_run(data, tmp_path, capsys):
     assert "p1   edge_noise=0.08" in out
     assert main(["sweep", str(spec), "--dry-run"]) == 0
     assert capsys.readouterr().out.count("done  ") == 8
+
+
+@pytest.mark.parametrize("argv", [["sweep", "--help"], ["calibrate", "--help"]])
+def test_help_loads_no_heavy_module(argv):
+    import subprocess
+    import sys
+
+    heavy = ("numpy", "scipy", "pandas", "pyarrow", "dask", "distributed", "occtrack.tracker")
+    code = (f"import sys\nfrom occtrack.cli import main\ntry:\n    main({argv!r})\n"
+            f"except SystemExit:\n    pass\n"
+            f"print('loaded:', *sorted(m for m in {heavy!r} if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.rstrip().splitlines()[-1] == "loaded:"

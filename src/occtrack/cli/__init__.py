@@ -29,6 +29,7 @@ from occtrack.errors import OcctrackError
 
 COMMANDS = (
     "benchmark",
+    "calibrate",
     "demo",
     "eval",
     "foursquare",
