@@ -255,3 +255,49 @@ def test_help_loads_no_heavy_module(argv):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True)
     assert done.stdout.rstrip().splitlines()[-1] == "loaded:"
+
+
+def test_scheduler_address_sends_the_same_tasks(cluster, tmp_path):
+    """--scheduler: a client of a running cluster (here the LocalCluster's own scheduler,
+    reached by its tcp:// address) gives the same table again."""
+    spec = sweep.load_spec(write(tmp_path / "s.toml", HIGHWAY_SPEC))
+    one = sweep.sweep(spec, tmp_path / "sequential.parquet")
+    address = cluster._cluster.scheduler_address
+    assert address.startswith("tcp://127.0.0.1:")
+    remote = sweep.DaskEngine(scheduler=address)
+    two = sweep.sweep(spec, tmp_path / "remote.parquet", remote)
+    assert not remote.started  # the command's own client is closed, the cluster is not
+    assert "Dask scheduler tcp://" in two.engine and "(2 workers)" in two.engine
+    import pandas as pd
+
+    pd.testing.assert_frame_equal(without_timing(one.table), without_timing(two.table))
+    with pytest.raises(OcctrackError, match="cannot reach the Dask scheduler"):
+        with sweep.DaskEngine(scheduler="tcp://127.0.0.1:9", timeout=1.0):
+            pass
+
+
+def test_example_specs_parse():
+    from pathlib import Path
+
+    folder = Path(__file__).resolve().parents[1] / "docs" / "sweeps"
+    spec = sweep.load_spec(folder / "highway.toml")
+    assert len(sweep.plan(spec)) == 72
+    from conftest import mot17_root
+
+    root, _ = mot17_root()
+    if (root / "MOT17-04-FRCNN").is_dir() and str(root).endswith("shared/data/mot17"):
+        spec = sweep.load_spec(folder / "mot17.toml")
+        assert len(sweep.plan(spec)) == 12 * len(spec.sequences)
+
+
+def test_reproduce_table3_on_dask_gives_the_same_table(capsys):
+    pytest.importorskip("distributed", reason="the Dask engine needs `occtrack[sweep]`")
+    args = ["reproduce", "table3", "--steps", "8", "--seeds", "2", "--json", "--quiet"]
+    assert main(args) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert main(args + ["--dask", "--jobs", "1"]) == 0
+    on_dask = json.loads(capsys.readouterr().out)
+    for sensor, row in plain.items():
+        for tracker, cell in row.items():
+            assert on_dask[sensor][tracker]["mean"] == cell["mean"]
+            assert on_dask[sensor][tracker]["stderr"] == cell["stderr"]

@@ -587,6 +587,7 @@ class DaskEngine:
 
     scheduler: str | None = None
     workers: int | None = None
+    timeout: float = 20.0  # seconds to reach a scheduler
     startup_seconds: float = 0.0
     describe: str = ""
     _client: object = field(default=None, repr=False)
@@ -604,7 +605,7 @@ class DaskEngine:
         start = time.perf_counter()
         if self.scheduler:
             try:
-                self._client = Client(self.scheduler, timeout="20s")
+                self._client = Client(self.scheduler, timeout=f"{self.timeout}s")
             except OSError as err:
                 raise OcctrackError(f"cannot reach the Dask scheduler at {self.scheduler}: "
                                     f"{err}; start one (dask scheduler) or drop --scheduler")\
@@ -615,7 +616,7 @@ class DaskEngine:
         else:
             n = self.workers or available_cores()
             self._cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                         dashboard_address=None, silence_logs=logging.ERROR)
+                                         dashboard_address=":0", silence_logs=logging.ERROR)
             self._client = Client(self._cluster)
             self.describe = f"Dask LocalCluster, {n} single-threaded worker processes"
         self.startup_seconds = time.perf_counter() - start
