@@ -15,8 +15,9 @@ combinations, times the [random] draws) x seed is one task. Results go into one 
 (-o, default SPEC with the suffix .parquet): per cell its settings (setting.NAME columns and
 canonical JSON in `settings`), seed, metrics (mot: HOTA, IDF1, MOTA, ... under the mot17
 protocol; highway: GOSPA per step and per car, and its split) and run time (`seconds`: the
-tracker; `task_seconds`: the whole task). The table is rewritten atomically every few seconds,
-so an interrupted sweep keeps its finished cells, and a rerun skips the cells already in it.
+tracker; `task_seconds`: the whole task; `cpu_seconds`: its CPU time). The table is rewritten
+atomically every few seconds, so an interrupted sweep keeps its finished cells, and a rerun
+skips the cells already in it.
 At the end a summary prints the means and standard errors over seeds. A failed task is
 reported with its settings (and not stored); the other tasks finish and the exit status is 1.
 

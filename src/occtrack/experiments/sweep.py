@@ -37,11 +37,11 @@ larger spec skips the cells already in the table.
 Each task returns one row: the cell's identity, every setting it was given (as `setting.NAME`
 columns and as canonical JSON in `settings`), the metrics (kind mot: TrackEval's HOTA, IDF1,
 MOTA, ... under the mot17 protocol; kind highway: GOSPA per step and per car and its split),
-the tracker's own seconds and the whole task's seconds. Rows are gathered into one Parquet
-table, rewritten atomically (`occtrack.io.atomic`) every few seconds and at the end, so an
-interrupted sweep keeps every finished cell. A failed task becomes a failure record with its
-settings and error; the other tasks finish, and failed cells are not stored (a rerun retries
-them).
+the tracker's own seconds, the whole task's seconds and its CPU seconds. Rows are gathered
+into one Parquet table, rewritten atomically (`occtrack.io.atomic`) every few seconds and at
+the end, so an interrupted sweep keeps every finished cell. A failed task becomes a failure
+record with its settings and error; the other tasks finish, and failed cells are not stored (a
+rerun retries them).
 
 Tasks are deterministic functions of their cell: the table does not depend on the engine (this
 process, a LocalCluster or a remote Dask scheduler) or on the order tasks finish in; rows are
@@ -70,7 +70,7 @@ KINDS = ("mot", "highway")
 DETECTIONS = ("det", "simulated")
 SETTING_PREFIX = "setting."
 IDENTITY = ("cell", "kind", "work", "tracker", "seed", "settings")
-TIMING = ("seconds", "task_seconds")
+TIMING = ("seconds", "task_seconds", "cpu_seconds")
 """Columns that measure time: they differ from run to run, everything else does not."""
 MOT_METRICS = ("hota", "idf1", "mota", "motp", "deta", "assa", "loca", "mostly_tracked",
                "mostly_lost", "fp", "fn", "id_switches", "tracks", "frames")
@@ -538,13 +538,14 @@ def _run_highway(cell: Cell) -> dict:
 
 def run_cell(cell: Cell) -> dict:
     """Run one cell and return its row; raises whatever the work raises."""
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     metrics = _run_mot(cell) if cell.kind == "mot" else _run_highway(cell)
     row = {"cell": cell.key, "kind": cell.kind, "work": cell.work, "tracker": cell.tracker,
            "seed": cell.seed, "settings": cell.settings}
     row.update({SETTING_PREFIX + name: value for name, value in cell.values.items()})
     row.update(metrics)
     row["task_seconds"] = time.perf_counter() - start
+    row["cpu_seconds"] = time.process_time() - cpu
     return row
 
 
@@ -670,9 +671,20 @@ def available_cores() -> int:
 # The table
 
 
+def require_parquet() -> None:
+    """OcctrackError unless pyarrow (pandas' Parquet engine) is installed."""
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise OcctrackError("the sweep's Parquet table needs pyarrow: pip install "
+                            "\"occtrack[sweep]\" (or pyarrow)") from None
+
+
 def read_table(path: str | os.PathLike):
     """The rows already in the table at `path` (an empty frame when there is none)."""
     import pandas as pd
+
+    require_parquet()
 
     target = Path(path)
     if not target.exists():
