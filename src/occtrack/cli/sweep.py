@@ -82,7 +82,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"{len(cells)} cells, {len(cells) - todo} in {output}, {todo} to run")
         return 0
     engine = None if args.sequential else sweep.DaskEngine(args.scheduler, args.workers)
-    outcome = sweep.sweep(spec, output, engine, quiet=args.quiet)
+    try:
+        outcome = sweep.sweep(spec, output, engine, quiet=args.quiet)
+    except KeyboardInterrupt:
+        print(f"occtrack sweep: the cells finished so far are in {output}; run the same "
+              f"command again to go on", file=sys.stderr)
+        raise
     if not args.quiet:
         print(sweep.summarise(outcome.table, outcome.cells))
         print(f"\n{len(outcome.cells)} cells: {outcome.ran} run, {outcome.skipped} already in "
