@@ -27,14 +27,14 @@ running Dask cluster (its workers must import occtrack and see the spec's folder
 runs them in this process without Dask (the same table). Dask and Parquet need the `sweep`
 extra: pip install "occtrack[sweep]".
 
-Spec:
+Spec (top-level keys first, as TOML wants):
+  trackers = ["none", "measurement-wise", "object-wise"]
+  seeds = [0]                       # a list, or K for seeds 1..K
   [work]
   kind = "mot"                      # or "highway" (steps = 1000, sensors = [...])
   sequences = ["../shared/data/mot17"]   # relative to the spec's folder
   detections = "det"                # or "simulated" (seeded from gt/gt.txt)
   config = "tracker.toml"           # optional settings file every cell starts from
-  trackers = ["none", "measurement-wise", "object-wise"]
-  seeds = [0]                       # a list, or K for seeds 1..K
   [base]                            # settings of every cell
   [grid]                            # NAME = [values...]: every combination
   [random]                          # samples = N, seed = S, NAME = {uniform | log_uniform |

@@ -1,18 +1,18 @@
 """Sweeps: many sequences, seeds and settings, each cell one task, on Dask or in this process.
 
-A spec (TOML) names the work, the trackers, the settings and the seeds:
+A spec (TOML) names the trackers, the seeds, the work and the settings:
+
+    trackers = ["none", "measurement-wise", "object-wise"]
+    seeds = [0, 1, 2]                     # or K: seeds 1..K
 
     [work]
     kind = "mot"                          # MOTChallenge sequence folders ...
     sequences = ["../shared/data/mot17"]  # folders, or folders of sequence folders
-    detections = "det"                    # det/det.txt, or "simulated" (seeded, from gt)
+    detections = "simulated"              # det/det.txt ("det"), or seeded from gt
 
     # kind = "highway"                    # ... or the highway simulation (Table III)
     # steps = 1000
     # sensors = ["object-wise", "measurement-wise"]
-
-    trackers = ["none", "measurement-wise", "object-wise"]
-    seeds = [0, 1, 2]                     # or K: seeds 1..K
 
     [base]                                # settings every cell gets
     max_labels = 96
@@ -160,6 +160,10 @@ def load_spec(path: str | os.PathLike) -> Spec:
     allowed = {"mot": {"kind", "sequences", "detections", "config"},
                "highway": {"kind", "steps", "sensors", "config"}}[kind]
     extra = sorted(set(work) - allowed)
+    misplaced = [k for k in extra if k in ("trackers", "seeds")]
+    if misplaced:
+        raise OcctrackError(f"{misplaced[0]} belongs at the top of the spec, above [work] (in "
+                            f"TOML a key after [work] is part of it)", source)
     if extra:
         raise OcctrackError(f"[work] key {extra[0]!r} is not used with kind = {kind!r} "
                             f"(it takes {', '.join(sorted(allowed))})", source)
