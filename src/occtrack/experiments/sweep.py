@@ -641,7 +641,12 @@ class DaskEngine:
         """Import what the tasks of `kind` need on every worker at once, before the clock of
         the tasks starts (counted in `startup_seconds`)."""
         start = time.perf_counter()
-        self._client.run(warm, kind)
+        try:
+            self._client.run(warm, kind)
+        except Exception as err:  # noqa: BLE001 - whatever the workers raised
+            what = f"{type(err).__name__}: {err}"
+            raise OcctrackError(f"the Dask workers cannot run occtrack's tasks ({what}); "
+                                f"install this occtrack where they run") from None
         self.startup_seconds += time.perf_counter() - start
 
     def __exit__(self, *exc) -> None:
