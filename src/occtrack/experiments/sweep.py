@@ -31,8 +31,10 @@ Settings are fields of `occtrack.config.TrackerConfig` (kind "mot") or of the hi
 `TrackerConfig` (kind "highway"; `simulation.NAME` and `simulation.road.NAME` set the
 simulation, which the tracker then matches as in `occtrack simulate highway`). A cell is one
 (work item, tracker, settings point, seed): a sequence or a simulated sensor, tracked and
-scored. Its key is a hash of everything that decides its result, so a rerun of the same or a
-larger spec skips the cells already in the table.
+scored. Its key is a hash of everything that decides its result (the settings, the seed, the
+text of the spec's settings file; a sequence by its name, not by its files' content: after a
+detection file changes, write to a new table), so a rerun of the same or a larger spec skips
+the cells already in the table.
 
 Each task returns one row: the cell's identity, every setting it was given (as `setting.NAME`
 columns and as canonical JSON in `settings`), the metrics (kind mot: TrackEval's HOTA, IDF1,
