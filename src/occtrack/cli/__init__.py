@@ -29,6 +29,7 @@ from occtrack.errors import OcctrackError
 
 COMMANDS = (
     "benchmark",
+    "calibrate",
     "demo",
     "eval",
     "foursquare",
@@ -38,6 +39,7 @@ COMMANDS = (
     "reproduce",
     "simulate",
     "simulate_detections",
+    "sweep",
     "track",
 )
 

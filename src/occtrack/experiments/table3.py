@@ -3,7 +3,8 @@
 Every (simulation, tracker, seed) cell is one run of `occtrack.highway.score.evaluate`; the
 three trackers of one simulation and seed see the very same cars and measurements. Seeds are
 1..K. Cells run in worker processes (`--jobs`), each deterministic, so the table does not
-depend on how the work is shared out.
+depend on how the work is shared out; `--dask` or `--scheduler ADDRESS` runs them as tasks of
+`occtrack sweep`'s Dask engine instead (the same cells, the same table).
 """
 
 from __future__ import annotations
@@ -56,6 +57,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "as for occtrack simulate highway); the paper's by default")
     parser.add_argument("--jobs", type=positive_int, default=2,
                         help="worker processes (default 2)")
+    engine = parser.add_mutually_exclusive_group()
+    engine.add_argument("--dask", action="store_true",
+                        help="run the cells as Dask tasks on a LocalCluster of --jobs workers "
+                             "(occtrack sweep's machinery; needs the sweep extra)")
+    engine.add_argument("--scheduler", metavar="ADDRESS",
+                        help="run the cells as Dask tasks on a running cluster, e.g. "
+                             "tcp://127.0.0.1:8786")
     parser.add_argument("--json", action="store_true", help="print the table as JSON")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -88,6 +96,36 @@ def compute(steps: int, seeds: int, jobs: int = 2, quiet: bool = True, simulatio
             for future in progress(as_completed(futures), len(work), "table3", quiet):
                 sensor, tracker, seed, score, seconds = future.result()
                 done[sensor][tracker][seed] = (score, seconds)
+    return {s: {t: [done[s][t][k] for k in sorted(done[s][t])] for t in TRACKERS}
+            for s in SENSORS}
+
+
+def compute_on_dask(steps: int, seeds: int, config: Path | None = None,
+                    scheduler: str | None = None, workers: int = 2,
+                    quiet: bool = True) -> dict:
+    """`compute`'s result with every cell a task of `occtrack sweep`'s Dask engine (the
+    same cells and seeds, so the same table)."""
+    from occtrack.experiments import sweep
+    from occtrack.highway.score import HighwayScore
+
+    spec = sweep.Spec(path=config or Path("table3"), kind="highway", trackers=TRACKERS,
+                      seeds=tuple(range(1, seeds + 1)), points=({},), sensors=SENSORS,
+                      steps=steps, config=config.resolve() if config else None)
+    cells = sweep.plan(spec)
+    done: dict = {s: {t: {} for t in TRACKERS} for s in SENSORS}
+    failures = []
+    with sweep.DaskEngine(scheduler=scheduler, workers=workers) as engine:
+        engine.warm("highway")
+        for cell, row in progress(engine.run(cells), len(cells), "table3", quiet):
+            if isinstance(row, sweep.Failure):
+                failures.append(row)
+                continue
+            score = HighwayScore(row["gospa"], row["gospa_per_car"], row["localisation"],
+                                 row["missed"], row["false"], row["steps"], row["car_steps"],
+                                 row["n_missed"], row["n_false"], row["tracks"])
+            done[cell.work][cell.tracker][cell.seed] = (score, row["seconds"])
+    if failures:
+        raise OcctrackError(sweep.format_failures(failures))
     return {s: {t: [done[s][t][k] for k in sorted(done[s][t])] for t in TRACKERS}
             for s in SENSORS}
 
@@ -152,7 +190,11 @@ def run(args: argparse.Namespace) -> int:
 
         simulation, tracking = load_config(args.config)
     start = time.perf_counter()
-    result = compute(args.steps, args.seeds, args.jobs, args.quiet, simulation, tracking)
+    if args.dask or args.scheduler:
+        result = compute_on_dask(args.steps, args.seeds, args.config, args.scheduler,
+                                 args.jobs, args.quiet)
+    else:
+        result = compute(args.steps, args.seeds, args.jobs, args.quiet, simulation, tracking)
     seconds = time.perf_counter() - start
     tracks = sum(score.tracks for row in result.values() for runs in row.values()
                  for score, _ in runs)

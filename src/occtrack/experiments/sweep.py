@@ -1,0 +1,903 @@
+"""Sweeps: many sequences, seeds and settings, each cell one task, on Dask or in this process.
+
+A spec (TOML) names the trackers, the seeds, the work and the settings:
+
+    trackers = ["none", "measurement-wise", "object-wise"]
+    seeds = [0, 1, 2]                     # or K: seeds 1..K
+
+    [work]
+    kind = "mot"                          # MOTChallenge sequence folders ...
+    sequences = ["../shared/data/mot17"]  # folders, or folders of sequence folders
+    detections = "simulated"              # det/det.txt ("det"), or seeded from gt
+
+    # kind = "highway"                    # ... or the highway simulation (Table III)
+    # steps = 1000
+    # sensors = ["object-wise", "measurement-wise"]
+
+    [base]                                # settings every cell gets
+    max_labels = 96
+
+    [grid]                                # every combination of these values
+    edge_noise = [0.05, 0.069, 0.1]
+    clutter_rate = [2.0, 5.0]
+
+    [random]                              # optional: `samples` random draws (x the grid)
+    samples = 8
+    seed = 0
+    velocity_time = {log_uniform = [0.5, 20.0]}
+    confirm_hits = {choice = [2, 3]}
+
+Settings are fields of `occtrack.config.TrackerConfig` (kind "mot") or of the highway's
+`TrackerConfig` (kind "highway"; `simulation.NAME` and `simulation.road.NAME` set the
+simulation, which the tracker then matches as in `occtrack simulate highway`). A cell is one
+(work item, tracker, settings point, seed): a sequence or a simulated sensor, tracked and
+scored. Its key is a hash of everything that decides its result (the settings, the seed, the
+text of the spec's settings file; a sequence by its name, not by its files' content: after a
+detection file changes, write to a new table), so a rerun of the same or a larger spec skips
+the cells already in the table.
+
+Each task returns one row: the cell's identity, every setting it was given (as `setting.NAME`
+columns and as canonical JSON in `settings`), the metrics (kind mot: TrackEval's HOTA, IDF1,
+MOTA, ... under the mot17 protocol; kind highway: GOSPA per step and per car and its split),
+the tracker's own seconds, the whole task's seconds and its CPU seconds. Rows are gathered
+into one Parquet table, rewritten atomically (`occtrack.io.atomic`) every few seconds and at
+the end, so an interrupted sweep keeps every finished cell. A failed task becomes a failure
+record with its settings and error; the other tasks finish, and failed cells are not stored (a
+rerun retries them).
+
+Tasks are deterministic functions of their cell: the table does not depend on the engine (this
+process, a LocalCluster or a remote Dask scheduler) or on the order tasks finish in; rows are
+written in the order of the plan.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import os
+import time
+import traceback
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from occtrack._compat import tomllib
+from occtrack.errors import OcctrackError
+
+KINDS = ("mot", "highway")
+DETECTIONS = ("det", "simulated")
+SETTING_PREFIX = "setting."
+IDENTITY = ("cell", "kind", "work", "tracker", "seed", "settings")
+TIMING = ("seconds", "task_seconds", "cpu_seconds")
+"""Columns that measure time: they differ from run to run, everything else does not."""
+MOT_METRICS = ("hota", "idf1", "mota", "motp", "deta", "assa", "loca", "mostly_tracked",
+               "mostly_lost", "fp", "fn", "id_switches", "tracks", "frames")
+HIGHWAY_METRICS = ("gospa", "gospa_per_car", "localisation", "missed", "false", "steps",
+                   "car_steps", "n_missed", "n_false", "tracks")
+HEADLINE = {"mot": (("hota", "HOTA"), ("idf1", "IDF1"), ("mota", "MOTA")),
+            "highway": (("gospa", "GOSPA/step"), ("gospa_per_car", "GOSPA/car"))}
+DISTRIBUTIONS = ("uniform", "log_uniform", "int_uniform", "choice")
+FLUSH_SECONDS = 5.0
+
+
+# ----------------------------------------------------------------------------------------------
+# The spec
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A parsed sweep spec; `points` are the settings points (grid x random draws), each
+    already merged over `base`."""
+
+    path: Path
+    kind: str
+    trackers: tuple[str, ...]
+    seeds: tuple[int, ...]
+    points: tuple[dict, ...]
+    sequences: tuple[Path, ...] = ()
+    detections: str = "det"
+    steps: int = 0
+    sensors: tuple[str, ...] = ()
+    config: Path | None = None
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One task: everything its result depends on. `settings` is a canonical JSON object."""
+
+    index: int
+    key: str
+    kind: str
+    work: str
+    tracker: str
+    seed: int
+    settings: str
+    source: str = ""  # the sequence folder (mot)
+    detections: str = "det"
+    steps: int = 0
+    config: str = ""  # a settings file every cell starts from (its text is in the key)
+
+    @property
+    def values(self) -> dict:
+        return json.loads(self.settings)
+
+    def describe(self) -> str:
+        what = f"{self.work} / {self.tracker} / seed {self.seed}"
+        values = self.values
+        if values:
+            what += " / " + ", ".join(f"{k}={_show(v)}" for k, v in values.items())
+        return what
+
+
+def _show(value) -> str:
+    return json.dumps(value) if isinstance(value, str | list) else f"{value}"
+
+
+def load_spec(path: str | os.PathLike) -> Spec:
+    """Read and check a spec file; OcctrackError naming the file on any fault."""
+    path = Path(path)
+    source = str(path)
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise OcctrackError("no such file", source) from None
+    except IsADirectoryError:
+        raise OcctrackError("is a directory, expected a sweep spec (TOML)", source) from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise OcctrackError(f"not valid TOML: {err}", source) from None
+    unknown = sorted(set(data) - {"work", "trackers", "seeds", "base", "grid", "random"})
+    if unknown:
+        raise OcctrackError(f"unknown key {unknown[0]!r}; a spec holds [work], trackers, "
+                            f"seeds, [base], [grid] and [random]", source)
+    work = _table(data, "work", source)
+    kind = work.get("kind")
+    if kind not in KINDS:
+        raise OcctrackError(f"[work] kind must be one of {', '.join(KINDS)}, not {kind!r}",
+                            source)
+    allowed = {"mot": {"kind", "sequences", "detections", "config"},
+               "highway": {"kind", "steps", "sensors", "config"}}[kind]
+    extra = sorted(set(work) - allowed)
+    misplaced = [k for k in extra if k in ("trackers", "seeds")]
+    if misplaced:
+        raise OcctrackError(f"{misplaced[0]} belongs at the top of the spec, above [work] (in "
+                            f"TOML a key after [work] is part of it)", source)
+    if extra:
+        raise OcctrackError(f"[work] key {extra[0]!r} is not used with kind = {kind!r} "
+                            f"(it takes {', '.join(sorted(allowed))})", source)
+    folder = path.resolve().parent
+    config = None
+    if "config" in work:
+        if not isinstance(work["config"], str):
+            raise OcctrackError("[work] config must be the path of a settings file", source)
+        config = (folder / work["config"]).resolve()
+        if not config.is_file():
+            raise OcctrackError(f"[work] config {work['config']!r}: no such file", source)
+        if kind == "highway":
+            from occtrack.highway.config import load_config
+
+            load_config(config)
+        else:
+            from occtrack.config import TrackerConfig
+
+            TrackerConfig.from_toml(config)
+
+    base = _table(data, "base", source)
+    grid = _table(data, "grid", source)
+    for name, values in grid.items():
+        if not isinstance(values, list) or not values:
+            raise OcctrackError(f"[grid] {name} must be a non-empty list of values", source)
+    names = list(grid)
+    grid_points = [dict(zip(names, combo, strict=True))
+                   for combo in itertools.product(*(grid[n] for n in names))]
+    random_points = _random_points(_table(data, "random", source), source)
+    points = [{**base, **g, **r} for g in grid_points for r in random_points]
+
+    spec_kwargs: dict = {}
+    if kind == "mot":
+        from occtrack.experiments.benchmark import MODELS, find_sequences
+
+        trackers = _names(data.get("trackers", ["measurement-wise"]), MODELS, "trackers", source)
+        sequences = work.get("sequences")
+        if not isinstance(sequences, list) or not sequences or not all(
+                isinstance(s, str) for s in sequences):
+            raise OcctrackError("[work] sequences must be a non-empty list of folders",
+                                source)
+        found: list[Path] = []
+        for entry in sequences:
+            target = (folder / entry).resolve()
+            try:
+                found += find_sequences(target)
+            except OcctrackError as err:
+                raise OcctrackError(f"[work] sequences: {err}", source) from None
+        detections = work.get("detections", "det")
+        if detections not in DETECTIONS:
+            raise OcctrackError(f"[work] detections must be one of {', '.join(DETECTIONS)}, "
+                                f"not {detections!r}", source)
+        default_seeds = [0]
+        spec_kwargs.update(sequences=tuple(dict.fromkeys(found)), detections=detections)
+    else:
+        from occtrack.highway.config import SENSOR_MODES
+        from occtrack.highway.occlusion import TRACKER_NAMES
+
+        trackers = _names(data.get("trackers", list(TRACKER_NAMES)), TRACKER_NAMES, "trackers",
+                          source)
+        sensors = _names(work.get("sensors", list(SENSOR_MODES)), SENSOR_MODES,
+                         "[work] sensors", source)
+        steps = work.get("steps", 1000)
+        if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+            raise OcctrackError(f"[work] steps must be a whole number >= 1, not {steps!r}",
+                                source)
+        default_seeds = [1]
+        spec_kwargs.update(sensors=tuple(sensors), steps=steps)
+    seeds = _seeds(data.get("seeds", default_seeds), source)
+    if kind == "mot" and spec_kwargs["detections"] == "det" and len(seeds) > 1:
+        raise OcctrackError("seeds only matter with simulated detections: with detections = "
+                            "\"det\" give one seed (or none)", source)
+    spec = Spec(path=path, kind=kind, trackers=tuple(trackers), seeds=tuple(seeds),
+                points=tuple(points), config=config, **spec_kwargs)
+    return dataclasses.replace(spec, points=tuple(_checked(spec, p, source) for p in points))
+
+
+def _table(data: dict, name: str, source: str) -> dict:
+    value = data.get(name, {})
+    if not isinstance(value, dict):
+        raise OcctrackError(f"{name} must be a table ([{name}])", source)
+    return value
+
+
+def _names(value, known, what: str, source: str) -> list[str]:
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, list) or not value or not all(isinstance(v, str) for v in value):
+        raise OcctrackError(f"{what} must be a non-empty list of names from "
+                            f"{', '.join(known)}", source)
+    bad = [v for v in value if v not in known]
+    if bad:
+        raise OcctrackError(f"{what}: unknown name {bad[0]!r}; choose from {', '.join(known)}",
+                            source)
+    return list(dict.fromkeys(value))
+
+
+def _seeds(value, source: str) -> list[int]:
+    if isinstance(value, int) and not isinstance(value, bool):
+        if value < 1:
+            raise OcctrackError(f"seeds = K must be at least 1 (seeds 1..K), not {value}",
+                                source)
+        return list(range(1, value + 1))
+    if (not isinstance(value, list) or not value
+            or not all(isinstance(v, int) and not isinstance(v, bool) and v >= 0
+                       for v in value)):
+        raise OcctrackError("seeds must be a whole number K (seeds 1..K) or a non-empty list "
+                            "of whole numbers >= 0", source)
+    return list(dict.fromkeys(value))
+
+
+def _random_points(table: dict, source: str) -> list[dict]:
+    """`samples` draws of the [random] settings (seeded); [{}] without a [random] table."""
+    if not table:
+        return [{}]
+    import numpy as np
+
+    samples, seed = table.get("samples"), table.get("seed", 0)
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        raise OcctrackError("[random] samples must be a whole number >= 1", source)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise OcctrackError("[random] seed must be a whole number >= 0", source)
+    laws = {k: v for k, v in table.items() if k not in ("samples", "seed")}
+    if not laws:
+        raise OcctrackError("[random] names no setting to draw", source)
+    for name, law in laws.items():
+        if not (isinstance(law, dict) and len(law) == 1 and next(iter(law)) in DISTRIBUTIONS):
+            raise OcctrackError(f"[random] {name} must be one of "
+                                + ", ".join(f"{{{d} = [...]}}" for d in DISTRIBUTIONS), source)
+        (how, args), = law.items()
+        if how == "choice":
+            if not isinstance(args, list) or not args:
+                raise OcctrackError(f"[random] {name}: choice needs a non-empty list", source)
+            continue
+        if not (isinstance(args, list) and len(args) == 2 and all(
+                isinstance(a, int | float) and not isinstance(a, bool) for a in args)
+                and args[0] <= args[1]):
+            raise OcctrackError(f"[random] {name}: {how} needs [low, high] with low <= high",
+                                source)
+        if how == "log_uniform" and args[0] <= 0:
+            raise OcctrackError(f"[random] {name}: log_uniform needs low > 0", source)
+        if how == "int_uniform" and not all(isinstance(a, int) for a in args):
+            raise OcctrackError(f"[random] {name}: int_uniform needs whole numbers", source)
+    rng = np.random.default_rng(seed)
+    points = []
+    for _ in range(samples):
+        point = {}
+        for name, law in laws.items():
+            (how, args), = law.items()
+            if how == "choice":
+                point[name] = args[int(rng.integers(len(args)))]
+            elif how == "uniform":
+                point[name] = float(rng.uniform(args[0], args[1]))
+            elif how == "log_uniform":
+                point[name] = float(math.exp(rng.uniform(math.log(args[0]),
+                                                         math.log(args[1]))))
+            else:
+                point[name] = int(rng.integers(args[0], args[1] + 1))
+        points.append(point)
+    return points
+
+
+def _checked(spec: Spec, point: dict, source: str) -> dict:
+    """The point's settings, typed as their fields (so equal settings give equal keys), or
+    OcctrackError naming the bad one, before any task runs."""
+    if spec.kind == "mot":
+        from occtrack.config import TrackerConfig
+
+        if "occlusion" in point:
+            raise OcctrackError("occlusion is chosen by trackers = [...], not by a setting",
+                                source)
+        base = _config_values(spec.config)
+        config = TrackerConfig.from_dict({**base, **point}, source)
+        return {name: _plain(getattr(config, name)) for name in point}
+    sim, road, tracker = _split_highway(point, source)
+    simulation, tracking = _highway_configs(spec.config, sim, road, tracker, source)
+    typed = {}
+    for name in point:
+        if name.startswith("simulation.road."):
+            typed[name] = getattr(simulation.road, name.rsplit(".", 1)[1])
+        elif name.startswith("simulation."):
+            typed[name] = getattr(simulation, name.split(".", 1)[1])
+        else:
+            typed[name] = getattr(tracking, name)
+    return {name: _plain(value) for name, value in typed.items()}
+
+
+def _plain(value):
+    """A setting as JSON holds it: tuples as lists, numbers as they are."""
+    return list(value) if isinstance(value, tuple) else value
+
+
+def _config_values(path: Path | None) -> dict:
+    if path is None:
+        return {}
+    from occtrack.config import load_toml
+
+    return load_toml(path)
+
+
+def _split_highway(point: dict, source: str) -> tuple[dict, dict, dict]:
+    sim, road, tracker = {}, {}, {}
+    for name, value in point.items():
+        if name.startswith("simulation.road."):
+            road[name.rsplit(".", 1)[1]] = value
+        elif name.startswith("simulation."):
+            sim[name.split(".", 1)[1]] = value
+        else:
+            tracker[name] = value
+    return sim, road, tracker
+
+
+def _highway_configs(path: Path | None, sim: dict, road: dict, tracker: dict, source: str):
+    """The highway's SimulationConfig and TrackerConfig from the spec's settings file (if any,
+    as for `occtrack simulate highway --config`) and a point's settings, which win; the tracker
+    matches the simulation's model unless set."""
+    from occtrack.highway.config import RoadConfig, SimulationConfig, TrackerConfig
+
+    file_sim: dict = {}
+    file_road: dict = {}
+    file_tracker: dict = {}
+    if path is not None:
+        from occtrack.config import load_toml
+
+        data = load_toml(path)
+        file_sim = dict(data.get("simulation", {}))
+        file_road = dict(file_sim.pop("road", {}))
+        file_tracker = dict(data.get("tracker", {}))
+    known = {"simulation.": SimulationConfig, "simulation.road.": RoadConfig, "": TrackerConfig}
+    for prefix, values in (("simulation.", sim), ("simulation.road.", road), ("", tracker)):
+        names = {f.name for f in dataclasses.fields(known[prefix])} - {"road"}
+        bad = sorted(set(values) - names)
+        if bad:
+            raise OcctrackError(f"unknown highway setting {prefix + bad[0]!r}; highway settings "
+                                f"are the tracker's fields, simulation.NAME and "
+                                f"simulation.road.NAME", source)
+    try:
+        road_config = RoadConfig(**{**file_road, **road})
+        simulation = SimulationConfig(**{**file_sim, **sim, "road": road_config})
+        simulation.validate()
+        tracking = TrackerConfig.matching(simulation, **{**file_tracker, **tracker})
+        tracking.validate()
+    except (TypeError, ValueError, OcctrackError) as err:
+        message = err.message if isinstance(err, OcctrackError) else str(err)
+        raise OcctrackError(message, source) from None
+    return simulation, tracking
+
+
+# ----------------------------------------------------------------------------------------------
+# The plan
+
+
+def plan(spec: Spec) -> list[Cell]:
+    """Every cell of the spec, in a fixed order: work item, tracker, point, seed."""
+    config_text = ""
+    if spec.config is not None:
+        config_text = spec.config.read_text(encoding="utf-8")
+    config_hash = hashlib.sha256(config_text.encode()).hexdigest()[:16] if config_text else ""
+    cells: list[Cell] = []
+    if spec.kind == "mot":
+        from occtrack.io.mot import read_seqinfo
+
+        works = []
+        for folder in spec.sequences:
+            works.append((str(read_seqinfo(folder)["name"]), str(folder)))
+        names = [name for name, _ in works]
+        if len(set(names)) < len(names):
+            raise OcctrackError("two sequence folders share a name in seqinfo.ini",
+                                str(spec.path))
+    else:
+        works = [(sensor, "") for sensor in spec.sensors]
+    for (work, source), tracker, point, seed in itertools.product(
+            works, spec.trackers, spec.points, spec.seeds):
+        settings = json.dumps(point, sort_keys=True)
+        identity = {"kind": spec.kind, "work": work, "tracker": tracker, "seed": seed,
+                    "settings": json.loads(settings), "config": config_hash}
+        if spec.kind == "mot":
+            identity["detections"] = spec.detections
+            identity["protocol"] = "mot17"
+        else:
+            identity["steps"] = spec.steps
+        key = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()[:20]
+        cells.append(Cell(index=len(cells), key=key, kind=spec.kind, work=work,
+                          tracker=tracker, seed=seed, settings=settings, source=source,
+                          detections=spec.detections, steps=spec.steps,
+                          config=str(spec.config) if spec.config else ""))
+    return cells
+
+
+# ----------------------------------------------------------------------------------------------
+# One task
+
+
+@dataclass(frozen=True)
+class Failure:
+    """A task that raised: the cell, the one-line error and the traceback."""
+
+    cell: Cell
+    error: str
+    traceback: str = ""
+
+
+_SEQUENCES: dict = {}
+_SIMULATED: dict = {}
+
+
+def _sequence(folder: str):
+    """The sequence folder, read once per process (a worker keeps it for later tasks)."""
+    from occtrack.experiments.benchmark import load_sequence
+
+    path = Path(folder)
+    stamp = tuple((path / part).stat().st_mtime_ns
+                  for part in ("seqinfo.ini", "det/det.txt", "gt/gt.txt"))
+    cached = _SEQUENCES.get(folder)
+    if cached is None or cached[0] != stamp:
+        _SEQUENCES[folder] = (stamp, load_sequence(path))
+    return _SEQUENCES[folder][1]
+
+
+def _detections(cell: Cell, seq):
+    if cell.detections == "det":
+        return seq.det
+    from occtrack.scenarios.detector import simulate_detections
+
+    key = (cell.source, cell.seed)
+    if key not in _SIMULATED:
+        if len(_SIMULATED) >= 8:
+            _SIMULATED.pop(next(iter(_SIMULATED)))
+        _SIMULATED[key] = simulate_detections(seq.gt, cell.seed, image_size=(seq.width,
+                                              seq.height), num_frames=seq.length)
+    return _SIMULATED[key]
+
+
+def _run_mot(cell: Cell) -> dict:
+    import numpy as np
+
+    from occtrack.config import TrackerConfig
+    from occtrack.io.mot import MotTable
+    from occtrack.metrics.protocols import scored_frames
+    from occtrack.metrics.trackeval_mot17 import sequence_results, summary
+    from occtrack.tracker import Tracker
+
+    seq = _sequence(cell.source)
+    det = _detections(cell, seq)
+    values = {**_config_values(Path(cell.config) if cell.config else None),
+              "image_size": (seq.width, seq.height), "fps": seq.fps,
+              **cell.values, "occlusion": cell.tracker}
+    config = TrackerConfig.from_dict(values, cell.config or "sweep settings")
+    start = time.perf_counter()
+    out = Tracker(config).run(det, seq.length)
+    seconds = time.perf_counter() - start
+    n = len(out.frame)
+    result = MotTable(out.frame, out.id, out.box, out.existence, np.full(n, -1),
+                      np.full(n, -1.0), "<occtrack>")
+    scores = summary(sequence_results(scored_frames(seq.gt, result, "mot17",
+                                                    seq.length).trackeval))
+    metrics = {key: scores[key] for key in MOT_METRICS if key in scores}
+    metrics["tracks"] = int(len(np.unique(result.id)))
+    metrics["frames"] = int(seq.length)
+    return {**metrics, "seconds": seconds}
+
+
+def _run_highway(cell: Cell) -> dict:
+    from occtrack.highway.score import evaluate
+
+    sim, road, tracker = _split_highway(cell.values, "sweep settings")
+    simulation, tracking = _highway_configs(Path(cell.config) if cell.config else None, sim,
+                                            road, tracker, cell.config or "sweep settings")
+    score, seconds = evaluate(simulation, tracking, cell.work, cell.tracker, cell.steps,
+                              cell.seed)
+    return {"gospa": score.per_step, "gospa_per_car": score.per_object,
+            "localisation": score.localisation, "missed": score.missed, "false": score.false,
+            "steps": score.steps, "car_steps": score.car_steps, "n_missed": score.n_missed,
+            "n_false": score.n_false, "tracks": score.tracks, "seconds": seconds}
+
+
+def run_cell(cell: Cell) -> dict:
+    """Run one cell and return its row; raises whatever the work raises."""
+    start, cpu = time.perf_counter(), time.process_time()
+    metrics = _run_mot(cell) if cell.kind == "mot" else _run_highway(cell)
+    row = {"cell": cell.key, "kind": cell.kind, "work": cell.work, "tracker": cell.tracker,
+           "seed": cell.seed, "settings": cell.settings}
+    row.update({SETTING_PREFIX + name: value for name, value in cell.values.items()})
+    row.update(metrics)
+    row["task_seconds"] = time.perf_counter() - start
+    row["cpu_seconds"] = time.process_time() - cpu
+    return row
+
+
+def run_task(cell: Cell) -> dict | Failure:
+    """`run_cell`, with a failure returned as a Failure (text only, so it travels from any
+    worker) instead of raised."""
+    try:
+        return run_cell(cell)
+    except Exception as err:  # noqa: BLE001 - every failure is reported with its cell
+        what = str(err) if isinstance(err, OcctrackError | OSError) else (
+            f"{type(err).__name__}: {err}")
+        return Failure(cell, what, traceback.format_exc())
+
+
+# ----------------------------------------------------------------------------------------------
+# Engines: each yields (cell, row or Failure) as tasks finish
+
+
+def warm(kind: str) -> None:
+    """Import the modules a task of `kind` uses (a worker's first task would otherwise pay)."""
+    if kind == "mot":
+        import occtrack.metrics.protocols  # noqa: F401
+        import occtrack.metrics.trackeval_mot17  # noqa: F401
+        import occtrack.tracker  # noqa: F401
+    else:
+        import occtrack.highway.score  # noqa: F401
+        import occtrack.highway.simulate  # noqa: F401
+        import occtrack.highway.tracker  # noqa: F401
+
+
+def run_sequential(cells: list[Cell]) -> Iterator[tuple[Cell, dict | Failure]]:
+    for cell in cells:
+        yield cell, run_task(cell)
+
+
+@dataclass
+class DaskEngine:
+    """Tasks on Dask distributed: a LocalCluster of `workers` single-threaded processes,
+    started and stopped here, or the scheduler at `scheduler` (tcp://HOST:PORT)."""
+
+    scheduler: str | None = None
+    workers: int | None = None
+    timeout: float = 20.0  # seconds to reach a scheduler
+    startup_seconds: float = 0.0
+    describe: str = ""
+    _client: object = field(default=None, repr=False)
+    _cluster: object = field(default=None, repr=False)
+
+    def __enter__(self) -> DaskEngine:
+        try:
+            import logging
+
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise OcctrackError("Dask is not installed: pip install \"occtrack[sweep]\" (or "
+                                "\"dask[distributed]\" pyarrow), or run with --sequential")\
+                from None
+        start = time.perf_counter()
+        if self.scheduler:
+            try:
+                self._client = Client(self.scheduler, timeout=f"{self.timeout}s")
+            except OSError as err:
+                raise OcctrackError(f"cannot reach the Dask scheduler at {self.scheduler}: "
+                                    f"{err}; start one (dask scheduler) or drop --scheduler")\
+                    from None
+            info = self._client.scheduler_info()
+            n = len(info.get("workers", {}))
+            self.describe = f"Dask scheduler {self.scheduler} ({n} workers)"
+        else:
+            import dask
+
+            n = self.workers or available_cores()
+            # the workers' statistical profiler samples every thread's stack every 10 ms,
+            # which costs the tasks about a sixth of their CPU here; nobody reads it
+            with dask.config.set({"distributed.worker.profile.enabled": False}):
+                self._cluster = LocalCluster(n_workers=n, threads_per_worker=1,
+                                             processes=True, dashboard_address=":0",
+                                             silence_logs=logging.ERROR)
+            self._client = Client(self._cluster)
+            self.describe = f"Dask LocalCluster, {n} single-threaded worker processes"
+        self.startup_seconds = time.perf_counter() - start
+        return self
+
+    @property
+    def started(self) -> bool:
+        return self._client is not None
+
+    def warm(self, kind: str) -> None:
+        """Import what the tasks of `kind` need on every worker at once, before the clock of
+        the tasks starts (counted in `startup_seconds`)."""
+        start = time.perf_counter()
+        try:
+            self._client.run(warm, kind)
+        except Exception as err:  # noqa: BLE001 - whatever the workers raised
+            what = f"{type(err).__name__}: {err}"
+            raise OcctrackError(f"the Dask workers cannot run occtrack's tasks ({what}); "
+                                f"install this occtrack where they run") from None
+        self.startup_seconds += time.perf_counter() - start
+
+    def __exit__(self, *exc) -> None:
+        client, cluster = self._client, self._cluster
+        self._client = self._cluster = None
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+    def run(self, cells: list[Cell]) -> Iterator[tuple[Cell, dict | Failure]]:
+        from dask.distributed import as_completed
+
+        client = self._client
+        futures = {client.submit(run_task, cell, pure=False): cell for cell in cells}
+        try:
+            for future in as_completed(futures):
+                cell = futures[future]
+                if future.status == "error":  # the worker itself died (memory, a crash)
+                    err = future.exception()
+                    yield cell, Failure(cell, f"{type(err).__name__}: {err}")
+                else:
+                    yield cell, future.result()
+                future.release()
+        finally:
+            client.cancel([f for f in futures if not f.done()])
+
+
+def available_cores() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:
+        return max(1, os.cpu_count() or 1)
+
+
+# ----------------------------------------------------------------------------------------------
+# The table
+
+
+def require_parquet() -> None:
+    """OcctrackError unless pyarrow (pandas' Parquet engine) is installed."""
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise OcctrackError("the sweep's Parquet table needs pyarrow: pip install "
+                            "\"occtrack[sweep]\" (or pyarrow)") from None
+
+
+def read_table(path: str | os.PathLike):
+    """The rows already in the table at `path` (an empty frame when there is none)."""
+    import pandas as pd
+
+    require_parquet()
+
+    target = Path(path)
+    if not target.exists():
+        return pd.DataFrame()
+    try:
+        table = pd.read_parquet(target)
+    except Exception as err:  # noqa: BLE001 - pyarrow raises several types for a bad file
+        raise OcctrackError(f"not a Parquet table a sweep wrote ({type(err).__name__}: {err});"
+                            f" move it away or write to another -o", str(target)) from None
+    if "cell" not in table.columns:
+        raise OcctrackError("a Parquet table without a 'cell' column is not a sweep's table; "
+                            "write to another -o", str(target))
+    return table
+
+
+def write_table(path: str | os.PathLike, old, rows: list[dict], order: dict[str, int]):
+    """Old rows and new rows as one table, written atomically: rows of this plan in plan
+    order, older rows the plan does not name first, as they were. Returns the table."""
+    import pandas as pd
+
+    new = pd.DataFrame(rows)
+    frames = [f for f in (old, new) if len(f)]
+    table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    if len(table):
+        table = table.drop_duplicates("cell", keep="last")
+        position = table["cell"].map(order).fillna(-1)
+        table = table.iloc[position.argsort(kind="stable")].reset_index(drop=True)
+        table = table[_column_order(table.columns)]
+    from occtrack.io.atomic import atomic_path
+
+    with atomic_path(path, overwrite=True) as tmp:
+        table.to_parquet(tmp, index=False)
+    return table
+
+
+def _column_order(columns) -> list[str]:
+    columns = list(columns)
+    first = [c for c in IDENTITY if c in columns]
+    settings = sorted(c for c in columns if c.startswith(SETTING_PREFIX))
+    timing = [c for c in TIMING if c in columns]
+    metrics = [c for c in columns if c not in first and c not in settings and c not in timing]
+    return first + settings + metrics + timing
+
+
+# ----------------------------------------------------------------------------------------------
+# The sweep
+
+
+@dataclass
+class Outcome:
+    """What a sweep did: the whole table, the cells of this plan, how many ran and were
+    skipped, the failures, the seconds the tasks took (wall) and the engine's start-up."""
+
+    table: object
+    cells: list[Cell]
+    ran: int
+    skipped: int
+    failures: list[Failure]
+    seconds: float
+    startup_seconds: float = 0.0
+    engine: str = ""
+
+
+def sweep(spec: Spec, output: str | os.PathLike, engine: DaskEngine | None = None,
+          quiet: bool = True, on_result: Callable[[Cell, dict | Failure], None] | None = None,
+          flush_seconds: float = FLUSH_SECONDS) -> Outcome:
+    """Run every cell of `spec` not yet in the table at `output`, on `engine` (None: in this
+    process), writing the table as results come in."""
+    from occtrack.io.atomic import check_output
+    from occtrack.progress import progress
+
+    check_output(output, overwrite=True, inputs=(spec.path,))
+    cells = plan(spec)
+    old = read_table(output)
+    done = set(old["cell"]) if len(old) else set()
+    todo = [cell for cell in cells if cell.key not in done]
+    order = {cell.key: cell.index for cell in cells}
+    rows: list[dict] = []
+    failures: list[Failure] = []
+    table = old
+    with contextlib.ExitStack() as stack:
+        if engine is not None and todo:
+            if not engine.started:  # else the caller started it and stops it
+                stack.enter_context(engine)
+            engine.warm(spec.kind)
+        start = time.perf_counter()
+        last_flush = start
+        results: Iterable = run_sequential(todo) if engine is None else engine.run(todo)
+        try:
+            for cell, result in progress(results, len(todo), "sweep", quiet):
+                if isinstance(result, Failure):
+                    failures.append(result)
+                else:
+                    rows.append(result)
+                if on_result is not None:
+                    on_result(cell, result)
+                if rows and time.perf_counter() - last_flush >= flush_seconds:
+                    table = write_table(output, old, rows, order)
+                    last_flush = time.perf_counter()
+        finally:
+            seconds = time.perf_counter() - start
+            if rows or not Path(output).exists():
+                table = write_table(output, old, rows, order)
+    failures.sort(key=lambda f: f.cell.index)
+    return Outcome(table=table, cells=cells, ran=len(rows), skipped=len(cells) - len(todo),
+                   failures=failures, seconds=seconds,
+                   startup_seconds=engine.startup_seconds if engine else 0.0,
+                   engine=(engine.describe or "no engine (nothing to run)") if engine
+                   else "this process, one task at a time")
+
+
+# ----------------------------------------------------------------------------------------------
+# The summary
+
+
+def _mean_stderr(values) -> tuple[float, float]:
+    import numpy as np
+
+    v = np.asarray(values, dtype=float)
+    if len(v) == 0:
+        return float("nan"), float("nan")
+    stderr = float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else float("nan")
+    return float(v.mean()), stderr
+
+
+def _cellfmt(mean: float, stderr: float) -> str:
+    if math.isnan(mean):
+        return "-"
+    return f"{mean:.3f}" + ("" if math.isnan(stderr) else f" +- {stderr:.3f}")
+
+
+def summarise(table, cells: list[Cell]) -> str:
+    """Means and standard errors over seeds of the headline metrics, per work item, tracker
+    and settings point, for the cells of this plan; then, with more than one work item, the
+    mean over work items (the standard error over seeds of each seed's mean)."""
+    if not len(table) or not cells:
+        return "no finished cell to summarise"
+    keys = {cell.key for cell in cells}
+    rows = table[table["cell"].isin(keys)]
+    if not len(rows):
+        return "no finished cell of this spec to summarise"
+    kind = cells[0].kind
+    headline = [(k, title) for k, title in HEADLINE[kind] if k in rows.columns]
+    seeds = sorted({cell.seed for cell in cells})
+    point_order = list(dict.fromkeys(cell.settings for cell in cells))
+    point_name = {s: f"p{i}" for i, s in enumerate(point_order)}
+    lines = []
+    if len(point_order) > 1:
+        lines.append("settings points:")
+        for settings in point_order:
+            values = json.loads(settings)
+            text = ", ".join(f"{k}={_show(v)}" for k, v in values.items()) or "(defaults)"
+            lines.append(f"  {point_name[settings]:<5}{text}")
+        lines.append("")
+    seed_text = (f"seed {seeds[0]}" if len(seeds) == 1 else
+                 f"mean +- standard error over {len(seeds)} seeds")
+    lines.append(f"{kind} sweep: {seed_text}")
+    work_title = "sequence" if kind == "mot" else "simulated"
+    header = f"  {work_title:<18}{'tracker':<20}{'point':<7}{'n':>3}" + "".join(
+        f"{title:>18}" for _, title in headline)
+    lines.append(header)
+    works = list(dict.fromkeys(cell.work for cell in cells))
+    trackers = list(dict.fromkeys(cell.tracker for cell in cells))
+    for work in works:
+        for tracker in trackers:
+            for settings in point_order:
+                sel = rows[(rows["work"] == work) & (rows["tracker"] == tracker)
+                           & (rows["settings"] == settings)]
+                if not len(sel):
+                    continue
+                stats = [_mean_stderr(sel[k]) for k, _ in headline]
+                lines.append(f"  {work:<18}{tracker:<20}{point_name[settings]:<7}"
+                             f"{len(sel):>3}" + "".join(f"{_cellfmt(*s):>18}" for s in stats))
+    if len(works) > 1:
+        lines += ["", f"mean over the {len(works)} "
+                  + ("sequences" if kind == "mot" else "simulations")
+                  + ("" if len(seeds) == 1 else ", +- standard error over seeds of each "
+                                                "seed's mean"),
+                  f"  {'tracker':<20}{'point':<7}{'n':>3}"
+                  + "".join(f"{title:>18}" for _, title in headline)]
+        for tracker in trackers:
+            for settings in point_order:
+                sel = rows[(rows["tracker"] == tracker) & (rows["settings"] == settings)]
+                if not len(sel):
+                    continue
+                complete = sel.groupby("seed").filter(lambda g: g["work"].nunique()
+                                                      == len(works))
+                per_seed = complete.groupby("seed")[[k for k, _ in headline]].mean()
+                stats = [_mean_stderr(per_seed[k]) for k, _ in headline]
+                lines.append(f"  {tracker:<20}{point_name[settings]:<7}{len(per_seed):>3}"
+                             + "".join(f"{_cellfmt(*s):>18}" for s in stats))
+    return "\n".join(lines)
+
+
+def format_failures(failures: list[Failure]) -> str:
+    lines = [f"{len(failures)} task(s) failed (not stored; a rerun retries them):"]
+    for failure in failures:
+        lines.append(f"  {failure.cell.describe()}: {failure.error}")
+    return "\n".join(lines)

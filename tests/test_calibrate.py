@@ -1,0 +1,189 @@
+"""`occtrack calibrate`: the detector model recovered from simulated detections whose true
+parameters are known (`occtrack.scenarios.detector`), and the TOML it writes.
+
+The scene: 36 people in their own cells of a 1920 x 1080 image (so non-maximum suppression
+never joins two of them), heights log-uniform in 40-300 px, visibility drawn afresh every 25
+frames, 600 frames. The simulated detector's truth, from its parameters:
+- a person is detected when the logit b + w_v (v - 1) - w_h max(0, log(h_ref / h)) + d + e
+  clears logit(0.5), with d + e ~ N(0, person_std^2 + noise_std^2) marginally, so P_D of a row
+  is Phi(mu / sqrt(person_std^2 + noise_std^2));
+- false boxes come at false_positive_rate per frame with logit-normal scores, so the false
+  detections per frame with a score in [a, b) are that rate times the normal mass of
+  [logit a, logit b) above logit(0.5);
+- the left / right edges move by edge_noise_x of the width, top / bottom by edge_noise_y of
+  the height.
+Over 100 seeds of this scene (scene and detector) the 95 % intervals covered the truth 90-100 %
+of the time, quantity by quantity (mean 96 %); here a few fixed seeds are checked: every
+headline quantity inside its interval, and nearly every bin.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import logit
+from scipy.stats import norm
+
+from occtrack._compat import tomllib
+from occtrack.cli import main
+from occtrack.config import TrackerConfig
+from occtrack.io.mot import MotTable
+from occtrack.models.calibration import (
+    HEIGHT_BINS,
+    SCORE_BINS,
+    VISIBILITY_BINS,
+    Labelled,
+    _bins,
+    calibrate,
+    poisson_power_fit,
+)
+from occtrack.scenarios.detector import DetectorConfig, simulate_detections
+
+FRAMES = 600
+SIZE = (1920.0, 1080.0)
+CONFIG = DetectorConfig()
+
+
+def scene(seed: int, frames: int = FRAMES, cols: int = 12, rows: int = 3,
+          segment: int = 25) -> MotTable:
+    rng = np.random.default_rng(seed)
+    n = cols * rows
+    h = np.exp(rng.uniform(np.log(40.0), np.log(300.0), n))
+    w = 0.41 * h
+    cx = (np.arange(n) % cols + 0.5) * 160.0
+    bottom = (np.arange(n) // cols + 1) * 360.0 - 20.0
+    frame = np.repeat(np.arange(1, frames + 1), n)
+    ids = np.tile(np.arange(1, n + 1), frames)
+    vis = rng.uniform(0.0, 1.0, (frames // segment + 1, n))[(frame - 1) // segment, ids - 1]
+    k = ids - 1
+    box = np.stack([cx[k] - w[k] / 2, bottom[k] - h[k], w[k], h[k]], axis=1)
+    m = len(frame)
+    return MotTable(frame, ids, box, np.ones(m), np.ones(m, dtype=np.int64), vis)
+
+
+def true_detection(gt: MotTable, cfg: DetectorConfig = CONFIG) -> np.ndarray:
+    mu = (cfg.bias + cfg.visibility_weight * (gt.visibility - 1)
+          - cfg.height_weight * np.log(cfg.height_ref / gt.box[:, 3]).clip(0))
+    return norm.cdf((mu - logit(cfg.score_threshold)) / math.hypot(cfg.person_std,
+                                                                   cfg.noise_std))
+
+
+def true_false_rates(cfg: DetectorConfig = CONFIG) -> np.ndarray:
+    lo = logit(np.maximum(np.array(SCORE_BINS[:-1]), cfg.score_threshold))
+    with np.errstate(divide="ignore"):
+        hi = logit(np.array(SCORE_BINS[1:]))
+    mass = (norm.cdf((hi - cfg.false_positive_logit) / cfg.false_positive_logit_std)
+            - norm.cdf((lo - cfg.false_positive_logit) / cfg.false_positive_logit_std))
+    return cfg.false_positive_rate * np.where(np.array(SCORE_BINS[1:]) > cfg.score_threshold,
+                                              mass, 0.0)
+
+
+@pytest.fixture(scope="module", params=[0, 1, 2])
+def simulated(request):
+    seed = request.param
+    gt = scene(seed)
+    det = simulate_detections(gt, seed, CONFIG, image_size=SIZE, num_frames=FRAMES)
+    return gt, det, calibrate([Labelled("SYN", gt, det, SIZE, 30.0, FRAMES)], seed=seed)
+
+
+def test_headline_parameters_are_recovered_within_their_intervals(simulated):
+    gt, _, cal = simulated
+    pd = true_detection(gt)
+    assert cal.detection_overall.covers(pd.mean())
+    assert cal.detectability.covers(pd[gt.visibility >= 0.75].mean())
+    assert cal.false_per_frame.covers(true_false_rates().sum())
+    for edge, truth in (("left", CONFIG.edge_noise_x), ("right", CONFIG.edge_noise_x),
+                        ("top", CONFIG.edge_noise_y), ("bottom", CONFIG.edge_noise_y)):
+        estimate = cal.edge_std_own[edge]
+        assert estimate.covers(truth), (edge, estimate)
+        assert estimate.high - estimate.low < 0.2 * truth  # and the interval says something
+        assert cal.edge_bias[edge].covers(0.0)
+    # the tracker's unit is the box height: top and bottom are edge_noise_y there
+    assert cal.edge_std["top"].covers(CONFIG.edge_noise_y)
+    assert cal.detection_overall.high - cal.detection_overall.low < 0.15
+
+
+def test_detection_and_clutter_curves_are_recovered_bin_by_bin(simulated):
+    gt, _, cal = simulated
+    pd = true_detection(gt)
+    vb, hb = _bins(gt.visibility, VISIBILITY_BINS), _bins(gt.box[:, 3], HEIGHT_BINS)
+    checks = [e.covers(pd[vb == i].mean()) for i, (_, _, e) in enumerate(cal.by_visibility)]
+    checks += [e.covers(pd[hb == j].mean()) for j, (_, _, e) in enumerate(cal.by_height)
+               if e.n]
+    rates = true_false_rates()
+    checks += [e.covers(rates[k]) for k, (_, hi, e, _) in enumerate(cal.by_score)
+               if hi > CONFIG.score_threshold]
+    assert len(checks) >= 11
+    assert sum(checks) >= len(checks) - 1, checks  # 95 % intervals: about 1 in 20 misses
+    # detection falls with occlusion, and clutter with the score, as simulated
+    values = [e.value for _, _, e in cal.by_visibility]
+    assert values == sorted(values)
+    assert cal.by_score[1][2].value > cal.by_score[2][2].value
+
+
+def test_power_law_fit_is_exact_on_its_own_model():
+    """False counts exactly c s^-p times their exposure: the fit returns c and p."""
+    centres = np.array([0.3, 0.7, 0.95, 0.995, 0.9995])
+    hits = np.array([50.0, 100.0, 400.0, 800.0, 20000.0])
+    frames, area = 1000.0, 2.0
+    for c, p in ((0.02, 2.5), (0.5, 0.7)):
+        exposure = frames * area * hits / hits.sum()
+        counts = exposure * c * centres ** -p
+        got_c, got_p = poisson_power_fit(counts, hits, frames, area, centres)
+        assert got_c[0] == pytest.approx(c, rel=1e-6)
+        assert got_p[0] == pytest.approx(p, rel=1e-6)
+    # no false detection at all: no clutter
+    got_c, _ = poisson_power_fit(np.zeros(5), hits, frames, area, centres)
+    assert got_c[0] == 0.0
+
+
+def test_command_writes_a_tracker_config(tmp_path, capsys):
+    gt = scene(3, frames=200)
+    det = simulate_detections(gt, 3, CONFIG, image_size=SIZE, num_frames=200)
+    gt_file, det_file = tmp_path / "gt.txt", tmp_path / "det.txt"
+    gt_file.write_text("".join(
+        f"{f},{i},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},1,1,{v:.3f}\n"
+        for f, i, b, v in zip(gt.frame, gt.id, gt.box, gt.visibility, strict=True)))
+    det_file.write_text("".join(f"{f},-1,{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{s}\n"
+                                for f, b, s in zip(det.frame, det.box, det.score,
+                                                   strict=True)))
+    out = tmp_path / "detector.toml"
+    args = ["calibrate", str(gt_file), str(det_file), "--image-size", "1920x1080",
+            "--fps", "30", "-o", str(out)]
+    assert main(args) == 0
+    report = capsys.readouterr().out
+    assert "by visibility" in report and "edge_noise" in report
+    data = tomllib.loads(out.read_text())
+    assert set(data) <= {"detectability", "detectability_ratio", "clutter_rate",
+                         "clutter_score_power", "edge_noise"}
+    assert {"detectability", "edge_noise", "clutter_rate"} <= set(data)
+    config = TrackerConfig.from_toml(out)  # what `occtrack track --config` does
+    assert config.edge_noise == data["edge_noise"]
+    assert 0.01 < data["edge_noise"] < 0.1 and 0.5 < data["detectability"] < 1
+    text = out.read_text()
+    assert "95 % interval" in text and "# The measurements:" in text
+
+    assert main(args) == 1  # exists: --force to overwrite
+    assert "--force" in capsys.readouterr().err
+    result = tmp_path / "result.txt"
+    assert main(["track", str(det_file), "--image-size", "1920x1080", "--fps", "30",
+                 "--config", str(out), "-o", str(result)]) == 0
+    assert result.stat().st_size > 0
+    capsys.readouterr()
+    assert main(["calibrate", str(gt_file), "-o", str(tmp_path / "x.toml")]) == 1
+    assert "in pairs" in capsys.readouterr().err
+    assert main(["calibrate", str(gt_file), str(det_file)]) == 1
+    assert "--image-size" in capsys.readouterr().err
+
+
+def test_mot17_04_real_detections(mot17_04, tmp_path, capsys):
+    """On the real detections the command runs, and the intervals hold their estimates."""
+    out = tmp_path / "detector.toml"
+    assert main(["calibrate", str(mot17_04 / "gt" / "gt.txt"),
+                 str(mot17_04 / "det" / "det.txt"), "-o", str(out), "--quiet"]) == 0
+    data = tomllib.loads(out.read_text())
+    TrackerConfig.from_toml(out)
+    assert 0.005 < data["edge_noise"] < 0.1
+    assert data["clutter_rate"] > 0 and data["clutter_score_power"] >= 0
