@@ -179,7 +179,9 @@ class GaussianMixturePMB:
     def _warn_once(self, what: str, message: str) -> None:
         if what not in self._warned:
             self._warned.add(what)
-            warnings.warn(message, RuntimeWarning, stacklevel=4)
+            # (the caller of Tracker.step: _warn_once, _select or _assign_labels, _update,
+            # the filter's step, Tracker.step)
+            warnings.warn(message, RuntimeWarning, stacklevel=6)
 
     # -- public -------------------------------------------------------------------------
 
@@ -617,10 +619,10 @@ class GaussianMixturePMB:
             self._warn_once("labels", (
                 f"max_labels = {limit} reached at step {self.steps + 1}: {len(ranked)} "
                 f"Bernoullis held existence >= {self.config.label_min_existence:g}, the "
-                f"{len(lost)} weakest (existence up to {lost.max():.3g}, "
-                f"{int((lost > self.config.report_existence).sum())} of them reported) were "
-                f"recycled into the Poisson part and lose their tracks; set max_labels = 0 to "
-                f"let labels grow with the scene (reported once)"))
+                f"{len(lost)} weakest (existence up to {lost.max():.3g}; "
+                f"{int((lost > self.config.report_existence).sum())} of them above "
+                f"report_existence) were recycled into the Poisson part and lose their tracks; "
+                f"set max_labels = 0 to let labels grow with the scene (reported once)"))
             ranked = ranked[:limit]
         keep_old = np.zeros(len(old), dtype=bool)
         keep_old[ranked[ranked < len(old)]] = True
