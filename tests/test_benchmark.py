@@ -5,47 +5,21 @@ from __future__ import annotations
 import json
 import shutil
 
-import numpy as np
 import pytest
 
 from occtrack import peers
 from occtrack.cli import main
 from occtrack.experiments.benchmark import MODELS, find_sequences
-from occtrack.scenarios.pedestrians import Crowd, crowd_scene
+from sequences import SEQINFO, write_sequence
 
-SEQINFO = """[Sequence]
-name={name}
-imDir=img1
-frameRate=10
-seqLength={length}
-imWidth=1280
-imHeight=720
-imExt=.jpg
-"""
 LENGTH = 36
 FRACTIONS = ("hota", "idf1", "deta", "assa", "loca", "motp")
 COUNTS = ("mostly_tracked", "mostly_lost", "fp", "fn", "id_switches", "tracks")
 
 
-def _write(path, table, gt: bool) -> None:
-    tail = (lambda i: "1,1,1") if gt else (lambda i: f"{table.score[i]:.3f},-1,-1")
-    ids = table.id if gt else np.full(len(table), -1)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("".join(
-        f"{table.frame[i]},{ids[i]},{table.box[i, 0]:.2f},{table.box[i, 1]:.2f},"
-        f"{table.box[i, 2]:.2f},{table.box[i, 3]:.2f},{tail(i)}\n"
-        for i in np.random.default_rng(0).permutation(len(table))))
-
-
 def make_sequence(folder, name: str, truth_as_detections: bool = False):
-    scene = crowd_scene(Crowd(people=5, frames=LENGTH - 4, image_size=(1280.0, 720.0),
-                              fps=10.0), seed=4)
-    folder.mkdir(parents=True)
-    (folder / "seqinfo.ini").write_text(SEQINFO.format(name=name, length=LENGTH))
-    _write(folder / "gt" / "gt.txt", scene.truth, gt=True)
-    _write(folder / "det" / "det.txt", scene.truth if truth_as_detections else scene.detections,
-           gt=False)
-    return scene
+    return write_sequence(folder, name, people=5, frames=LENGTH - 4, length=LENGTH, seed=4,
+                          truth_as_detections=truth_as_detections, shuffle=True)
 
 
 @pytest.fixture(scope="module")

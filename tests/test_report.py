@@ -14,35 +14,15 @@ import pytest
 from occtrack.cli import main
 from occtrack.experiments import benchmark
 from occtrack.metrics.evaluate import gospa_per_frame
-from occtrack.scenarios.pedestrians import Crowd, crowd_scene
+from sequences import write_sequence
 
 TRACKERS = ("none", "measurement-wise")
 LENGTH = 40
-SEQINFO = """[Sequence]
-name={name}
-imDir=img1
-frameRate=10
-seqLength={length}
-imWidth=1280
-imHeight=720
-imExt=.jpg
-"""
 
 
 def make_sequence(folder, name: str, seed: int) -> None:
     """A synthetic MOTChallenge sequence folder: a crowd's ground truth and detections."""
-    scene = crowd_scene(Crowd(people=8, frames=LENGTH, image_size=(1280.0, 720.0), fps=10.0),
-                        seed=seed)
-    (folder / "gt").mkdir(parents=True)
-    (folder / "det").mkdir()
-    (folder / "seqinfo.ini").write_text(SEQINFO.format(name=name, length=LENGTH))
-    for path, table, gt in ((folder / "gt" / "gt.txt", scene.truth, True),
-                            (folder / "det" / "det.txt", scene.detections, False)):
-        path.write_text("".join(
-            f"{table.frame[i]},{table.id[i] if gt else -1},{table.box[i, 0]:.2f},"
-            f"{table.box[i, 1]:.2f},{table.box[i, 2]:.2f},{table.box[i, 3]:.2f},"
-            + ("1,1,1\n" if gt else f"{table.score[i]:.3f},-1,-1\n")
-            for i in range(len(table))))
+    write_sequence(folder, name, people=8, frames=LENGTH, length=LENGTH, seed=seed)
 
 
 @pytest.fixture(scope="module")

@@ -5,42 +5,21 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 
 from occtrack.cli import main
 from occtrack.errors import OcctrackError
 from occtrack.experiments import sweep
-from occtrack.scenarios.pedestrians import Crowd, crowd_scene
+from sequences import write_sequence
 
 pytest.importorskip("pyarrow", reason="the sweep's table needs `pip install occtrack[sweep]`")
 
-SEQINFO = """[Sequence]
-name={name}
-imDir=img1
-frameRate=10
-seqLength={length}
-imWidth=1280
-imHeight=720
-imExt=.jpg
-"""
 LENGTH = 30
 
 
 def make_sequence(folder, name: str, seed: int = 4) -> None:
     """A small synthetic MOTChallenge sequence folder (gt with class 1, visibility 1)."""
-    scene = crowd_scene(Crowd(people=4, frames=LENGTH, image_size=(1280.0, 720.0), fps=10.0),
-                        seed=seed)
-    folder.mkdir(parents=True)
-    (folder / "seqinfo.ini").write_text(SEQINFO.format(name=name, length=LENGTH))
-    for sub, table, gt in (("gt", scene.truth, True), ("det", scene.detections, False)):
-        (folder / sub).mkdir()
-        tail = (lambda i: "1,1,1") if gt else (lambda i, t=table: f"{t.score[i]:.3f},-1,-1")
-        ids = table.id if gt else np.full(len(table), -1)
-        (folder / sub / f"{sub}.txt").write_text("".join(
-            f"{table.frame[i]},{ids[i]},{table.box[i, 0]:.2f},{table.box[i, 1]:.2f},"
-            f"{table.box[i, 2]:.2f},{table.box[i, 3]:.2f},{tail(i)}\n"
-            for i in range(len(table))))
+    write_sequence(folder, name, people=4, frames=LENGTH, length=LENGTH, seed=seed)
 
 
 @pytest.fixture(scope="module")
