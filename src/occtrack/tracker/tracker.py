@@ -38,6 +38,7 @@ from occtrack.occlusion.boxes import box_occlusion
 from occtrack.progress import progress
 from occtrack.tracker.boxes import (
     BoxFormat,
+    as_array,
     check_classes,
     check_format,
     check_scores,
@@ -338,14 +339,7 @@ def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np
     for index, frame in enumerate(detections):
         if num_frames is not None and index >= num_frames:
             return
-        if isinstance(frame, str | bytes):
-            raise ValueError(f"frame {index + 1}: detections must be an (M, 4) or (M, 5) "
-                             f"array, not the string {frame[:40]!r}")
-        try:
-            arr = np.asarray(frame, dtype=float)
-        except (TypeError, ValueError) as err:
-            raise ValueError(f"frame {index + 1}: detections must be an (M, 4) or (M, 5) "
-                             f"array of numbers ({err})") from None
+        arr = as_array(frame, f"frame {index + 1}: detections", "(M, 4) or (M, 5)")
         if arr.size == 0:
             arr = arr.reshape(0, 4)
         if arr.ndim != 2 or arr.shape[1] not in (4, 5):
