@@ -39,7 +39,7 @@ EQUIVALENT = ROOT / "benchmarks" / "mutation_equivalent.md"
 # module group -> (files mutated, the tests that exercise them)
 GROUPS = {
     "filters": (["src/occtrack/filters/*"], ["test_housekeeping.py", "test_tracker.py"]),
-    "association": (["src/occtrack/association/*"], ["test_lbp.py"]),
+    "association": (["src/occtrack/association/*"], ["test_lbp.py", "test_association_exact.py"]),
     "occlusion": (["src/occtrack/occlusion/*"],
                   ["test_box_occlusion.py", "test_tracker.py", "test_housekeeping.py"]),
     "models": (["src/occtrack/models/*"], ["test_gaussian.py", "test_box_occlusion.py",
