@@ -77,7 +77,7 @@ def test_weights_are_unnormalised_up_to_the_float_range():
     the largest float (1e307 here)."""
     w_hit, w_miss, w_new = two_by_two()
     small = exact_marginals(w_hit, w_miss, w_new)
-    one = exact_marginals([[1e307]], [1e306], [1.0])
+    one = exact_marginals([[1e308]], [1e307], [1.0])
     np.testing.assert_allclose(one.p_hit, [[1 / 1.1]], rtol=1e-13)
     for scale in (1e-300, 1e300):
         # every association has two factors here, so scale each by sqrt(scale)
@@ -136,7 +136,7 @@ def blocks(rng, count, size):
     return w_hit, rng.uniform(0.1, 1.0, n), rng.uniform(0.01, 1.0, m)
 
 
-@pytest.mark.parametrize("count,size", [(3, 3), (21, 4)])  # 27 pairs: one cluster; 336: 21
+@pytest.mark.parametrize("count,size", [(3, 3), (21, 4), (2, 12)])  # 27, 336, 288 pairs
 def test_sparse_matches_the_dense_form_cluster_by_cluster(count, size):
     """Each cluster of the sparse form iterates exactly as the dense form on that cluster
     alone (same iterations, same marginals up to rounding); the whole run takes as many
@@ -144,11 +144,14 @@ def test_sparse_matches_the_dense_form_cluster_by_cluster(count, size):
     runs as the dense form on all of it."""
     rng = np.random.default_rng(count)
     w_hit, w_miss, w_new = blocks(rng, count, size)
+    # one more object and one more measurement in no pair: missed and new for sure
+    w_hit = np.pad(w_hit, ((0, 1), (0, 1)))
+    w_miss, w_new = np.append(w_miss, 0.5), np.append(w_new, 0.5)
     i, j = np.nonzero(w_hit)
     tol = 1e-6
     sparse = lbp_sparse(i, j, w_hit[i, j], w_miss, w_new, tol=tol)
     clustered = len(i) >= lbp_module.CLUSTER_MIN_PAIRS
-    assert clustered == (count == 21)
+    assert clustered == (count != 3)
     if not clustered:
         dense = lbp_marginals(w_hit, w_miss, w_new, tol=tol)
         assert sparse.clusters == 1 and sparse.iterations == dense.iterations
@@ -156,7 +159,8 @@ def test_sparse_matches_the_dense_form_cluster_by_cluster(count, size):
         np.testing.assert_allclose(sparse.p_miss, dense.p_miss, rtol=1e-12)
         np.testing.assert_allclose(sparse.p_new, dense.p_new, rtol=1e-12)
         return
-    assert sparse.clusters == count
+    assert sparse.clusters == count + 2  # the lone object and measurement count as clusters
+    assert (sparse.p_miss[-1], sparse.p_new[-1]) == (1.0, 1.0)
     iterations = []
     for b in range(count):
         s = slice(b * size, (b + 1) * size)
@@ -166,7 +170,7 @@ def test_sparse_matches_the_dense_form_cluster_by_cluster(count, size):
         np.testing.assert_allclose(sparse.p_hit[mine], dense.p_hit.ravel(), rtol=1e-12)
         np.testing.assert_allclose(sparse.p_miss[s], dense.p_miss, rtol=1e-12)
         np.testing.assert_allclose(sparse.p_new[s], dense.p_new, rtol=1e-12)
-    assert len(set(iterations)) > 1 and sparse.iterations == max(iterations)
+    assert iterations[0] != iterations[-1] and sparse.iterations == max(iterations)
     # defaults: tol 1e-7, max_iter 1000
     default = lbp_sparse(i, j, w_hit[i, j], w_miss, w_new)
     explicit = lbp_sparse(i, j, w_hit[i, j], w_miss, w_new, tol=1e-7, max_iter=1000)
@@ -199,3 +203,22 @@ def test_clusters_are_connected_components_of_the_pairs():
     assert count == 4  # {o0, o1, m0, m3}, {o2, m1}, {o3}, {m2}
     assert cluster[0] == cluster[1] == cluster[3] != cluster[2]
     assert cluster.shape == (4,)
+
+
+def test_clusters_from_exactly_cluster_min_pairs_and_exact_fixed_points():
+    """256 separate pairs (CLUSTER_MIN_PAIRS): 256 clusters, each a one-to-one problem whose
+    messages stop changing at the second iteration. With tol 0 a change of 0 is not below
+    it, so no cluster is frozen and BP runs to max_iter; with the default tolerance every
+    cluster stops at iteration 2."""
+    E = lbp_module.CLUSTER_MIN_PAIRS
+    rng = np.random.default_rng(0)
+    w_hit, w_miss, w_new = rng.uniform(0.1, 1.0, E), rng.uniform(0.1, 1.0, E), \
+        rng.uniform(0.1, 0.9, E)
+    pairs = np.arange(E)
+    marg = lbp_sparse(pairs, pairs, w_hit, w_miss, w_new, tol=0.0, max_iter=40)
+    assert (marg.clusters, marg.iterations) == (E, 40)
+    marg = lbp_sparse(pairs, pairs, w_hit, w_miss, w_new)
+    assert (marg.clusters, marg.iterations) == (E, 2)
+    np.testing.assert_allclose(marg.p_hit, w_hit / (w_hit + w_miss * w_new), rtol=1e-13)
+    one_less = lbp_sparse(pairs[1:], pairs[1:], w_hit[1:], w_miss, w_new)
+    assert one_less.clusters == 1
