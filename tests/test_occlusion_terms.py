@@ -136,3 +136,56 @@ def test_sparse_visible_equals_the_full_table(with_weights, with_skip):
     if skip is not None:
         p[skip[:, None] == np.arange(70)] = 0.0
     np.testing.assert_allclose(full, np.prod(1 - p, axis=1), rtol=1e-12)
+
+
+@pytest.mark.parametrize("settings,message", [
+    (dict(gain=0.0), "occlusion gain must be positive"),
+    (dict(gain=-1.0), "occlusion gain must be positive"),
+    (dict(ramp_zero=0.2, ramp_one=0.2), "occlusion ramp must rise: ramp_one > ramp_zero"),
+    (dict(ramp_zero=0.3, ramp_one=0.2), "occlusion ramp must rise: ramp_one > ramp_zero"),
+])
+def test_geometry_settings_are_checked(settings, message):
+    with pytest.raises(ValueError) as err:
+        BoxOcclusionGeometry(**settings)
+    assert str(err.value) == message
+
+
+def test_a_small_gain_and_a_steep_ramp_are_valid():
+    geometry = BoxOcclusionGeometry(gain=0.5, ramp_zero=0.0, ramp_one=1e-9)
+    p = geometry(A[None], BEHIND[None])  # half covered: 0.5 * 0.5; bottom far lower
+    np.testing.assert_allclose(p, [[0.25]], rtol=1e-12)
+
+
+def test_boxes_apart_on_both_axes_never_hide_each_other():
+    """Negative overlaps on both axes must not multiply into a positive area."""
+    p = BoxOcclusionGeometry()(A[None], edges(20, 30, 20, 40)[None])
+    assert p[0, 0] == 0.0
+
+
+def test_sub_pixel_boxes_keep_their_own_size():
+    """Box sizes are floored at 1e-9 only against division by zero: a 0.5 px box half
+    covered is half covered (cover 0.3 here, times the gain 2), and the bottom gap is read in
+    the occluder's own 0.5 px height (0.4 of it, past the ramp's top)."""
+    a = edges(0.0, 0.5, 0.0, 0.5)
+    b = edges(0.25, 0.75, 0.2, 0.7)
+    p = BoxOcclusionGeometry()(a[None], b[None])
+    np.testing.assert_allclose(p, [[0.6]], rtol=1e-12)
+    b_low = edges(0.25, 0.75, 0.05, 0.55)  # gap 0.1: (0.1 + 0.1) / 0.35 of the ramp
+    overlap = 0.25 * 0.45
+    np.testing.assert_allclose(BoxOcclusionGeometry()(a[None], b_low[None]),
+                               [[min(2 * overlap / 0.25, 1) * 0.2 / 0.35]], rtol=1e-12)
+
+
+def test_models_by_name_keep_the_geometry_and_floor_given():
+    from occtrack.occlusion.boxes import box_occlusion
+
+    geometry = BoxOcclusionGeometry(gain=3.0)
+    assert box_occlusion("measurement-wise", geometry).geometry is geometry
+    model = box_occlusion("object-wise", geometry, min_existence=0.4)
+    assert model.geometry is geometry and model.min_existence == 0.4
+    default = box_occlusion("object-wise")
+    assert default.min_existence == 0.1 and default.geometry == BoxOcclusionGeometry()
+    with pytest.raises(ValueError) as err:
+        box_occlusion("grid")
+    assert str(err.value) == ("unknown occlusion model 'grid'; choose from none, object-wise, "
+                              "measurement-wise")
