@@ -220,5 +220,9 @@ def test_clusters_from_exactly_cluster_min_pairs_and_exact_fixed_points():
     marg = lbp_sparse(pairs, pairs, w_hit, w_miss, w_new)
     assert (marg.clusters, marg.iterations) == (E, 2)
     np.testing.assert_allclose(marg.p_hit, w_hit / (w_hit + w_miss * w_new), rtol=1e-13)
+    # dyadic weights: the messages are exact from the first iteration (a change of exactly 0)
+    half, one = np.full(E, 0.5), np.ones(E)
+    assert lbp_sparse(pairs, pairs, half, one, one, tol=0.0, max_iter=40).iterations == 40
+    assert lbp_sparse(pairs, pairs, half, one, one).iterations == 1
     one_less = lbp_sparse(pairs[1:], pairs[1:], w_hit[1:], w_miss, w_new)
     assert one_less.clusters == 1
