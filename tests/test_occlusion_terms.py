@@ -189,3 +189,38 @@ def test_models_by_name_keep_the_geometry_and_floor_given():
         box_occlusion("grid")
     assert str(err.value) == ("unknown occlusion model 'grid'; choose from none, object-wise, "
                               "measurement-wise")
+
+
+def test_without_gating_the_models_build_the_full_tables():
+    """gating False: the terms are the full K x N table's numbers to the last bit (the
+    checking mode); gating True: the overlapping pairs' numbers, equal up to rounding."""
+    rng = np.random.default_rng(11)
+    comps, z = crowd(rng, 80), crowd(rng, 70)
+    means = states(*comps)
+    owner = np.repeat(np.arange(40), 2)
+    existence = rng.uniform(0.2, 1.0, 40)
+    geometry = BoxOcclusionGeometry()
+    for gating in (False, True):
+        ctx = context(means, owner, existence, z)
+        ctx = type(ctx)(**{**ctx.__dict__, "gating": gating})
+        boxes = ctx.measurement_model.predicted_edges(means)
+        mw = MeasurementWise().terms(ctx)
+        hidden = 1 - np.prod(1 - geometry(boxes, z), axis=-1)
+        p = geometry(z, z)
+        np.fill_diagonal(p, 0.0)
+        seen = 1 - np.prod(1 - p, axis=-1)
+        ow = ObjectWiseExpectedValue().terms(ctx).visible
+        if not gating:
+            np.testing.assert_array_equal(mw.hidden, hidden)
+            np.testing.assert_array_equal(mw.seen_hidden, seen)
+            np.testing.assert_array_equal(MeasurementWise().seen_hidden(z, sparse=False), seen)
+            mean = (boxes[0::2] + boxes[1::2]) / 2  # each object's two components, weights 1
+            q = geometry(boxes, mean) * existence
+            q[owner[:, None] == np.arange(40)] = 0.0  # never by itself
+            np.testing.assert_array_equal(ow, np.prod(1 - q, axis=-1))
+            full = ow
+        else:
+            np.testing.assert_allclose(mw.hidden, hidden, rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(mw.seen_hidden, seen, rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(ow, full, rtol=1e-12, atol=1e-15)
+    assert (hidden > 0).sum() > 20 and (seen > 0).sum() > 10 and (full < 1).sum() > 10
