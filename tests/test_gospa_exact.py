@@ -68,3 +68,26 @@ def test_a_pair_at_exactly_c_is_a_miss_and_a_false_object():
     assert (g.matched, g.n_missed, g.n_false, g.localisation, g.total) == (0, 1, 1, 0.0, 2.0)
     g = gospa_from_distances([[np.inf, 1.0]], c=2.0)
     assert (g.matched, g.localisation, g.false) == (1, 1.0, 1.0)
+
+
+def test_a_callable_distance_and_the_default_cut_off():
+    def manhattan(a, b):
+        return np.abs(a[:, None, :] - b[None, :, :]).sum(-1)
+
+    g = gospa([[0.0, 0.0]], [[1.0, 2.0]], manhattan, c=5.0)
+    assert (g.matched, g.localisation) == (1, 3.0)
+    g = gospa([[0.0]], [[0.75]])  # c = 1, p = 1 by default
+    assert (g.matched, g.localisation, g.total) == (1, 0.75, 0.75)
+    g = gospa([[0.0]], [[1.5]])
+    assert (g.matched, g.total) == (0, 1.0)
+
+
+def test_iou_of_integer_and_sub_unit_boxes():
+    """Integer boxes are numbers like any other; normalised boxes (area below 1) have an IoU
+    too; left and top are read from their own columns."""
+    g = gospa([[0, 0, 10, 20]], [[5, 10, 10, 20]], "iou", c=1.0)
+    assert g.localisation == pytest.approx(1 - 50 / 350)
+    small = np.array([[0.1, 0.2, 0.5, 0.5]])
+    np.testing.assert_allclose(iou(small, small), [[1.0]])
+    shifted = np.array([[0.3, 0.2, 0.5, 0.5]])  # left moved: 0.3 x 0.5 overlap
+    np.testing.assert_allclose(iou(small, shifted), [[0.15 / 0.35]], rtol=1e-12)
