@@ -91,3 +91,10 @@ def test_iou_of_integer_and_sub_unit_boxes():
     np.testing.assert_allclose(iou(small, small), [[1.0]])
     shifted = np.array([[0.3, 0.2, 0.5, 0.5]])  # left moved: 0.3 x 0.5 overlap
     np.testing.assert_allclose(iou(small, shifted), [[0.15 / 0.35]], rtol=1e-12)
+
+
+def test_members_given_as_matrices_are_flattened_to_rows():
+    """A set of (2, 2) edge boxes is a set of 4-vectors."""
+    truth = np.zeros((2, 2, 2))
+    g = gospa(truth, np.full((1, 2, 2), 0.25), c=2.0)
+    assert (g.matched, g.localisation, g.n_missed) == (1, 0.5, 1)
