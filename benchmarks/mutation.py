@@ -39,15 +39,17 @@ EQUIVALENT = ROOT / "benchmarks" / "mutation_equivalent.md"
 # module group -> (files mutated, the tests that exercise them)
 GROUPS = {
     "filters": (["src/occtrack/filters/*"], ["test_housekeeping.py", "test_tracker.py"]),
-    "association": (["src/occtrack/association/*"], ["test_lbp.py"]),
+    "association": (["src/occtrack/association/*"], ["test_lbp.py", "test_association_exact.py"]),
     "occlusion": (["src/occtrack/occlusion/*"],
-                  ["test_box_occlusion.py", "test_tracker.py", "test_housekeeping.py"]),
+                  ["test_box_occlusion.py", "test_occlusion_terms.py", "test_tracker.py",
+                   "test_housekeeping.py"]),
     "models": (["src/occtrack/models/*"], ["test_gaussian.py", "test_box_occlusion.py",
                                             "test_housekeeping.py", "test_tracker.py"]),
     "densities": (["src/occtrack/densities/*"], ["test_gaussian.py"]),
     "io-mot": (["src/occtrack/io/mot.py"],
                ["test_io_mot.py", "test_eval.py", "test_cli_track.py"]),
-    "gospa": (["src/occtrack/metrics/gospa.py"], ["test_gospa.py", "test_eval.py"]),
+    "gospa": (["src/occtrack/metrics/gospa.py"], ["test_gospa.py", "test_gospa_exact.py",
+                                                "test_eval.py"]),
 }
 DETECTED = {"killed", "timeout", "segfault"}
 UNDETECTED = {"survived", "no tests", "suspicious"}
