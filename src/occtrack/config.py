@@ -186,21 +186,12 @@ class TrackerConfig:
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be a positive number of seconds (inf: "
                                  f"constant velocity), not {getattr(self, name)}")
-        if self.frame_step < 1:
-            raise ValueError(f"frame_step must be at least 1, not {self.frame_step}")
         if not 1 <= self.confirm_hits <= self.confirm_window:
             raise ValueError(f"confirm_hits must be between 1 and confirm_window "
                              f"({self.confirm_window}), not {self.confirm_hits}")
-        if self.max_labels < 0:
-            raise ValueError(f"max_labels must be at least 1, or 0 to grow with the scene, not "
-                             f"{self.max_labels}")
         if self.capacity != 0 and self.capacity < 16:
             raise ValueError(f"capacity must be at least 16 components, or 0 to grow with the "
                              f"scene, not {self.capacity}")
-        if self.max_components_per_object < 0:
-            raise ValueError("max_components_per_object must be 0 (no limit) or more")
-        if self.lbp_max_iterations < 1:
-            raise ValueError("lbp_max_iterations must be at least 1")
         if not self.occlusion_ramp[1] > self.occlusion_ramp[0]:
             raise ValueError("occlusion_ramp must rise: (zero point, one point)")
         for name in ("birth_half_size", "birth_half_size_std"):
