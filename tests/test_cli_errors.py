@@ -7,6 +7,7 @@ import errno
 import importlib
 import subprocess
 import sys
+import tomllib
 
 import pytest
 
@@ -105,6 +106,15 @@ def test_stray_frame_number_is_an_error_not_a_loop(tmp_path, capsys):
     assert track(det, "-o", str(tmp_path / "r.txt"), "--max-gap-frames", "5") == 1
 
 
+def test_eval_bounds_empty_frames_when_the_length_is_unknown(tmp_path, capsys):
+    gt = tmp_path / "gt.txt"
+    gt.write_text(GT)
+    result = tmp_path / "result.txt"
+    result.write_text("1,1,10,10,30,90,1\n1000000000,1,10,10,30,90,1\n")
+    assert main(["eval", str(gt), str(result)]) == 1
+    one_error_line(capsys, f"occtrack eval: error: {result}:2: frame 1000000000 follows frame 1")
+
+
 def test_integer_columns_are_parsed_as_integers(tmp_path, capsys):
     det = tmp_path / "det.txt"
     det.write_text("1,-1,10,10,30,90,0.9\n2.5,-1,10,10,30,90,0.9\n")
@@ -178,6 +188,8 @@ def test_bad_toml_and_non_utf8_settings(det, tmp_path, capsys):
     (MemoryError(), 1, "occtrack track: error: cfg.toml: out of memory; lower the sizes"),
     (UnicodeDecodeError("utf-8", b"\xff", 0, 1, "invalid start byte"), 1,
      "occtrack track: error: an input is not UTF-8 text"),
+    (tomllib.TOMLDecodeError("Expected '='"), 1,
+     "occtrack track: error: a settings file is not valid TOML: Expected '='"),
     (ZeroDivisionError("division by zero"), 1,
      "occtrack track: error: internal error: ZeroDivisionError: division by zero; this is a "
      "bug"),
@@ -207,6 +219,7 @@ HEAVY = ("numpy", "scipy", "matplotlib", "trackeval", "motmetrics", "pandas", "t
 
 PROBE = """
 import sys
+import tomllib
 from occtrack.cli import main
 try:
     main({argv!r})

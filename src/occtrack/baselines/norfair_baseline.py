@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from occtrack.errors import OcctrackError
+from occtrack.io.atomic import check_output
 from occtrack.io.mot import MotTable, read_mot, write_mot
 
 NORFAIR_VERSION = "2.3.0"
@@ -221,8 +222,7 @@ def run_norfair(det_file: str | os.PathLike, result_file: str | os.PathLike,
                 quiet: bool = False) -> MotTable:
     """Read a detection file, track it with norfair and write a MOTChallenge result file
     (refusing to replace one unless `overwrite`). Returns the tracks written."""
-    if Path(result_file).exists() and not overwrite:
-        raise OcctrackError("exists already; pass --force to overwrite it", str(result_file))
+    check_output(result_file, overwrite, [det_file])
     det = read_mot(det_file, "det")
     tracks = track_norfair(det, frame_step, config, num_frames, quiet)
     write_mot(result_file, tracks.frame, tracks.id, tracks.box, tracks.score,

@@ -23,6 +23,7 @@ import errno
 import importlib
 import os
 import sys
+import tomllib
 
 from occtrack import __version__
 from occtrack.errors import OcctrackError
@@ -130,7 +131,7 @@ def explain(err: BaseException, config: str | None = None) -> str:
     if isinstance(err, UnicodeDecodeError):
         return (f"an input is not UTF-8 text (byte {err.start}: {err.reason}); save it as "
                 f"UTF-8")
-    if type(err).__name__ == "TOMLDecodeError":
+    if isinstance(err, tomllib.TOMLDecodeError):
         return f"a settings file is not valid TOML: {err}"
     if isinstance(err, MemoryError):
         where = f"{config}: " if config else ""
