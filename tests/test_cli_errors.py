@@ -7,10 +7,10 @@ import errno
 import importlib
 import subprocess
 import sys
-import tomllib
 
 import pytest
 
+from occtrack._compat import tomllib
 from occtrack.cli import COMMANDS, main
 
 DET = "1,-1,10,10,30,90,0.9\n2,-1,12,10,30,90,0.8\n3,-1,14,10,30,90,0.85\n"
@@ -219,7 +219,6 @@ HEAVY = ("numpy", "scipy", "matplotlib", "trackeval", "motmetrics", "pandas", "t
 
 PROBE = """
 import sys
-import tomllib
 from occtrack.cli import main
 try:
     main({argv!r})

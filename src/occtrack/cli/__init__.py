@@ -23,9 +23,9 @@ import errno
 import importlib
 import os
 import sys
-import tomllib
 
 from occtrack import __version__
+from occtrack._compat import tomllib
 from occtrack.errors import OcctrackError
 
 COMMANDS = (
