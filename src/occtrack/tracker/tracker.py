@@ -158,8 +158,7 @@ class Tracker:
         self._reported_serial = np.full(L, -1, dtype=np.int64)
         self._report_id = np.zeros(L, dtype=np.int64)
         self._next_id = 1
-        self._boxes = np.zeros((0, 4))
-        self._previous: np.ndarray | None = None
+        self._boxes = np.zeros((0, 4))  # the last step's detections (camera shift, reports)
         self._timestamp: float | None = None
 
     def update(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
@@ -238,13 +237,12 @@ class Tracker:
             if affine.shape != (2, 3) or not np.isfinite(affine).all():
                 raise ValueError("camera_motion must be a finite 2 x 3 affine matrix")
             camera = (np.diag(affine[:, :2]).copy(), affine[:, 2].copy())
-        elif self.config.camera_motion == "detections" and self._previous is not None:
-            shift = estimate_shift(self._previous, boxes)
+        elif self.config.camera_motion == "detections":
+            shift = estimate_shift(self._boxes, boxes)
             if shift is not None:
                 camera = (np.ones(2), shift)
         self.filter.step(edges_from_ltwh(boxes), scores, camera, dt=dt, classes=labels)
         self._boxes = boxes
-        self._previous = boxes
         return self.tracks()
 
     def tracks(self) -> Tracks:
