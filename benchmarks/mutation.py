@@ -48,8 +48,8 @@ GROUPS = {
     "densities": (["src/occtrack/densities/*"], ["test_gaussian.py"]),
     "io-mot": (["src/occtrack/io/mot.py"],
                ["test_io_mot.py", "test_eval.py", "test_cli_track.py"]),
-    "gospa": (["src/occtrack/metrics/gospa.py"], ["test_gospa.py", "test_gospa_exact.py",
-                                                "test_eval.py"]),
+    "gospa": (["src/occtrack/metrics/gospa.py", "src/occtrack/spatial.py"],
+              ["test_gospa.py", "test_gospa_exact.py", "test_eval.py", "test_scaling.py"]),
 }
 DETECTED = {"killed", "timeout", "segfault"}
 UNDETECTED = {"survived", "no tests", "suspicious"}

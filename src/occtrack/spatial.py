@@ -25,6 +25,20 @@ import numpy as np
 DENSE_PAIRS = 4096  # at most this many pairs: test them all at once
 
 
+def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Intersection over union of (left, top, width, height) boxes, all pairs:
+    (len(a), len(b)), 0 where both boxes are empty."""
+    ax0, ay0 = a[:, 0, None], a[:, 1, None]
+    ax1, ay1 = ax0 + a[:, 2, None], ay0 + a[:, 3, None]
+    bx0, by0 = b[None, :, 0], b[None, :, 1]
+    bx1, by1 = bx0 + b[None, :, 2], by0 + b[None, :, 3]
+    iw = np.clip(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0, None)
+    ih = np.clip(np.minimum(ay1, by1) - np.maximum(ay0, by0), 0, None)
+    inter = iw * ih
+    union = a[:, 2, None] * a[:, 3, None] + b[None, :, 2] * b[None, :, 3] - inter
+    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
+
+
 def _dense(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     hit = ((a[:, None, 0, 0] < b[None, :, 0, 1]) & (b[None, :, 0, 0] < a[:, None, 0, 1])
            & (a[:, None, 1, 0] < b[None, :, 1, 1]) & (b[None, :, 1, 0] < a[:, None, 1, 1]))

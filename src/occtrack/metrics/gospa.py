@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from occtrack.spatial import iou
+
 
 @dataclass(frozen=True)
 class Gospa:
@@ -98,19 +100,6 @@ def _rows(x) -> np.ndarray:
 
 def euclidean(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
-
-
-def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Intersection over union of (left, top, width, height) boxes, all pairs."""
-    ax0, ay0 = a[:, 0, None], a[:, 1, None]
-    ax1, ay1 = ax0 + a[:, 2, None], ay0 + a[:, 3, None]
-    bx0, by0 = b[None, :, 0], b[None, :, 1]
-    bx1, by1 = bx0 + b[None, :, 2], by0 + b[None, :, 3]
-    iw = np.clip(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0, None)
-    ih = np.clip(np.minimum(ay1, by1) - np.maximum(ay0, by0), 0, None)
-    inter = iw * ih
-    union = a[:, 2, None] * a[:, 3, None] + b[None, :, 2] * b[None, :, 3] - inter
-    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
 
 
 def one_minus_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:

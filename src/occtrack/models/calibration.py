@@ -49,6 +49,7 @@ from scipy.stats import t as student_t
 
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
+from occtrack.spatial import iou
 
 PEDESTRIAN = 1
 DISTRACTOR_CLASSES = (2, 7, 8, 12)
@@ -152,19 +153,6 @@ def _clip(x: float, lo: float, hi: float) -> float:
 # Matching
 
 
-def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of every pair of (left, top, width, height) boxes: (len(a), len(b))."""
-    ax1, ay1 = a[:, 0] + a[:, 2], a[:, 1] + a[:, 3]
-    bx1, by1 = b[:, 0] + b[:, 2], b[:, 1] + b[:, 3]
-    iw = np.clip(np.minimum(ax1[:, None], bx1[None]) - np.maximum(a[:, None, 0], b[None, :, 0]),
-                 0, None)
-    ih = np.clip(np.minimum(ay1[:, None], by1[None]) - np.maximum(a[:, None, 1], b[None, :, 1]),
-                 0, None)
-    inter = iw * ih
-    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None] - inter
-    return np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
-
-
 @dataclass(frozen=True)
 class Matched:
     """Per ground-truth row: target (a pedestrian to detect) and the detection row it took
@@ -192,7 +180,7 @@ def match(gt: MotTable, det: MotTable, num_frames: int) -> Matched:
         if len(g) == 0 or len(d) == 0:
             continue
         rows = gt_index[g]
-        sim = _iou(gt.box[rows], det.box[d])
+        sim = iou(gt.box[rows], det.box[d])
         score = np.where(sim >= MATCH_IOU - 1e-12, sim, 0.0)
         r, c = linear_sum_assignment(-score)
         ok = score[r, c] > 0

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from occtrack.spatial import overlapping_pairs
+from occtrack.spatial import iou, overlapping_pairs
 
 DENSE_PAIRS = 4096  # more box pairs than this: the sparse form (faster from here on)
 DENSE_VOTES = 64  # more candidates than this: votes counted by a sweep, not a C x C table
@@ -36,17 +36,6 @@ DENSE_VOTES = 64  # more candidates than this: votes counted by a sweep, not a C
 
 def _centres(boxes: np.ndarray) -> np.ndarray:
     return boxes[:, :2] + boxes[:, 2:] / 2.0
-
-
-def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    a_hi, b_hi = a[:, :2] + a[:, 2:], b[:, :2] + b[:, 2:]
-    across = np.minimum(a_hi[:, None, 0], b_hi[None, :, 0]) - np.maximum(a[:, None, 0],
-                                                                          b[None, :, 0])
-    down = np.minimum(a_hi[:, None, 1], b_hi[None, :, 1]) - np.maximum(a[:, None, 1],
-                                                                        b[None, :, 1])
-    inter = np.maximum(across, 0.0) * np.maximum(down, 0.0)
-    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :] - inter
-    return inter / np.maximum(union, 1e-12)
 
 
 def _edges(boxes: np.ndarray) -> np.ndarray:
@@ -114,11 +103,11 @@ def estimate_shift(previous: np.ndarray, current: np.ndarray, height_ratio: floa
     mode = _mode(candidates, votes)
     moved = previous.copy()
     moved[:, :2] += mode
-    iou = _iou(moved, current)
-    best_cur = iou.argmax(axis=1)
-    best_prev = iou.argmax(axis=0)
+    overlap = iou(moved, current)
+    best_cur = overlap.argmax(axis=1)
+    best_prev = overlap.argmax(axis=0)
     mutual = (best_prev[best_cur] == np.arange(len(previous))) & (
-        iou[np.arange(len(previous)), best_cur] > min_iou)
+        overlap[np.arange(len(previous)), best_cur] > min_iou)
     if mutual.sum() < min_pairs:
         return None
     i = np.flatnonzero(mutual)
@@ -179,7 +168,7 @@ def _votes(points: np.ndarray, radius: np.ndarray) -> np.ndarray:
 
 
 def _iou_pairs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of aligned boxes a[k], b[k] (K, 4), as `_iou` computes it."""
+    """IoU of aligned boxes a[k], b[k] (K, 4), as `occtrack.spatial.iou` computes it."""
     lo = np.maximum(a[:, :2], b[:, :2])
     hi = np.minimum(a[:, :2] + a[:, 2:], b[:, :2] + b[:, 2:])
     inter = np.clip(hi - lo, 0.0, None).prod(axis=-1)
