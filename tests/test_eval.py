@@ -157,8 +157,11 @@ def random_sequence(rng: np.random.Generator, frames: int = 40):
     return gt, res
 
 
-def trackeval_directly(folder: Path, gt_text: str, result_text: str, num_frames: int) -> dict:
-    """TrackEval's own Evaluator on a MOTChallenge folder layout, nothing of occtrack's."""
+def run_trackeval(folder: Path, gt_text: str, result_text: str, num_frames: int,
+                  write_files: bool = False) -> dict:
+    """TrackEval's own Evaluator on a MOTChallenge folder layout, nothing of occtrack's (its
+    run_mot_challenge.py metrics: HOTA, CLEAR, Identity); `write_files` lets it write its
+    summary and detailed files under folder/out/T. Returns its results of the sequence."""
     import trackeval
 
     write(folder, "gt/SEQ/gt/gt.txt", gt_text)
@@ -166,7 +169,7 @@ def trackeval_directly(folder: Path, gt_text: str, result_text: str, num_frames:
     write(folder, "trackers/T/data/SEQ.txt", result_text)
     evaluator = trackeval.Evaluator({
         "PRINT_RESULTS": False, "PRINT_CONFIG": False, "TIME_PROGRESS": False,
-        "OUTPUT_SUMMARY": False, "OUTPUT_DETAILED": False, "PLOT_CURVES": False,
+        "OUTPUT_SUMMARY": write_files, "OUTPUT_DETAILED": write_files, "PLOT_CURVES": False,
         "LOG_ON_ERROR": None})
     dataset = trackeval.datasets.MotChallenge2DBox({
         "GT_FOLDER": str(folder / "gt"), "TRACKERS_FOLDER": str(folder / "trackers"),
@@ -176,7 +179,12 @@ def trackeval_directly(folder: Path, gt_text: str, result_text: str, num_frames:
                trackeval.metrics.Identity({"PRINT_CONFIG": False})]
     with contextlib.redirect_stdout(io.StringIO()):
         results, _ = evaluator.evaluate([dataset], metrics)
-    r = results["MotChallenge2DBox"]["T"]["SEQ"]["pedestrian"]
+    return results["MotChallenge2DBox"]["T"]["SEQ"]["pedestrian"]
+
+
+def trackeval_directly(folder: Path, gt_text: str, result_text: str, num_frames: int) -> dict:
+    """TrackEval's scores, in `evaluate`'s keys."""
+    r = run_trackeval(folder, gt_text, result_text, num_frames)
     clear = r["CLEAR"]
     return {"mota": clear["MOTA"], "motp": clear["MOTP"], "idf1": r["Identity"]["IDF1"],
             "hota": np.mean(r["HOTA"]["HOTA"]), "mostly_tracked": clear["MT"],
@@ -389,23 +397,7 @@ def trackeval_files_directly(folder: Path, gt_text: str, result_text: str,
                              num_frames: int) -> dict[str, bytes]:
     """The summary and detailed files TrackEval's Evaluator writes itself (its
     run_mot_challenge.py metrics: HOTA, CLEAR, Identity, and Count, which it adds)."""
-    import trackeval
-
-    write(folder, "gt/SEQ/gt/gt.txt", gt_text)
-    write(folder, "gt/SEQ/seqinfo.ini", f"[Sequence]\nname=SEQ\nseqLength={num_frames}\n")
-    write(folder, "trackers/T/data/SEQ.txt", result_text)
-    evaluator = trackeval.Evaluator({
-        "PRINT_RESULTS": False, "PRINT_CONFIG": False, "TIME_PROGRESS": False,
-        "OUTPUT_SUMMARY": True, "OUTPUT_DETAILED": True, "PLOT_CURVES": False,
-        "LOG_ON_ERROR": None})
-    dataset = trackeval.datasets.MotChallenge2DBox({
-        "GT_FOLDER": str(folder / "gt"), "TRACKERS_FOLDER": str(folder / "trackers"),
-        "OUTPUT_FOLDER": str(folder / "out"), "SEQ_INFO": {"SEQ": None},
-        "SKIP_SPLIT_FOL": True, "TRACKERS_TO_EVAL": ["T"], "PRINT_CONFIG": False})
-    metrics = [trackeval.metrics.HOTA(), trackeval.metrics.CLEAR({"PRINT_CONFIG": False}),
-               trackeval.metrics.Identity({"PRINT_CONFIG": False})]
-    with contextlib.redirect_stdout(io.StringIO()):
-        evaluator.evaluate([dataset], metrics)
+    run_trackeval(folder, gt_text, result_text, num_frames, write_files=True)
     out = folder / "out" / "T"
     return {name: (out / name).read_bytes()
             for name in ("pedestrian_summary.txt", "pedestrian_detailed.csv")}

@@ -9,23 +9,13 @@ import warnings
 import numpy as np
 import pytest
 
+from box_states import edges, states
 from occtrack.models.box import BoxMeasurement
 from occtrack.occlusion.base import OcclusionContext
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, combine
 from occtrack.occlusion.box_measurementwise import MeasurementWise
 from occtrack.occlusion.box_objectwise import ObjectWiseExpectedValue
 from occtrack.spatial import DENSE_PAIRS
-
-
-def edges(x0, x1, y0, y1):
-    return np.array([[x0, x1], [y0, y1]], dtype=float)
-
-
-def states(*boxes):
-    """(centre, velocity 0, half-size) per axis from edge boxes."""
-    e = np.array(boxes)
-    return np.stack([(e[..., 0] + e[..., 1]) / 2, np.zeros(e.shape[:2]),
-                     (e[..., 1] - e[..., 0]) / 2], axis=-1)
 
 
 def context(means, owner, existence, measurements, weights=None):
