@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from box_states import edges, states
-from occtrack.models.box import BoxMeasurement
-from occtrack.occlusion.base import NoOcclusion, OcclusionContext
+from box_states import context, edges, states
+from occtrack.occlusion.base import NoOcclusion
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, combine
 from occtrack.occlusion.box_measurementwise import MeasurementWise
 from occtrack.occlusion.box_objectwise import ObjectWiseExpectedValue
@@ -31,15 +30,6 @@ def test_pairwise_occlusion_probability(occluder, expected):
 
 def test_occluders_combine_as_independent():
     np.testing.assert_allclose(combine(np.array([[0.5, 0.5], [0.2, 0.0]])), [0.75, 0.2])
-
-
-def context(means, owner, existence, measurements, weights=None):
-    k = len(means)
-    return OcclusionContext(means=means, covs=np.tile(np.eye(3), (k, 2, 1, 1)),
-                            weights=np.ones(k) if weights is None else weights,
-                            owner=np.asarray(owner), existence=np.asarray(existence, float),
-                            measurements=measurements,
-                            measurement_model=BoxMeasurement((100, 100)))
 
 
 def test_measurement_wise_hidden_term_from_visible_detections():

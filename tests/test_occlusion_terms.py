@@ -9,23 +9,11 @@ import warnings
 import numpy as np
 import pytest
 
-from box_states import edges, states
-from occtrack.models.box import BoxMeasurement
-from occtrack.occlusion.base import OcclusionContext
+from box_states import context, edges, states
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, combine
 from occtrack.occlusion.box_measurementwise import MeasurementWise
 from occtrack.occlusion.box_objectwise import ObjectWiseExpectedValue
 from occtrack.spatial import DENSE_PAIRS
-
-
-def context(means, owner, existence, measurements, weights=None):
-    k = len(means)
-    return OcclusionContext(means=means, covs=np.tile(np.eye(3), (k, 2, 1, 1)),
-                            weights=np.ones(k) if weights is None else weights,
-                            owner=np.asarray(owner), existence=np.asarray(existence, float),
-                            measurements=measurements,
-                            measurement_model=BoxMeasurement((100, 100)))
-
 
 A = edges(0, 10, 0, 10)
 BEHIND = edges(5, 15, 0, 20)  # half covers A with a far lower bottom: p(A hidden) = 1
