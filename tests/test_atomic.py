@@ -154,3 +154,23 @@ def test_failed_figure_leaves_the_old_picture(tmp_path):
     assert err.value.filename == str(path)
     assert path.read_bytes() == b"old picture" and leftovers(tmp_path) == []
     assert not plt.fignum_exists(fig.number)
+
+
+def test_a_folder_one_cannot_write_in_is_refused_up_front_naming_the_output(tmp_path,
+                                                                            monkeypatch):
+    """tests/test_faults.py makes the folder read-only for real; here the refusal is checked
+    wherever the tests run (root ignores chmod)."""
+    def denied(target):
+        raise PermissionError(errno.EACCES, "Permission denied",
+                              str(target.with_name(".out.1234.partial.txt")))
+
+    monkeypatch.setattr(atomic, "_temporary", denied)
+    with pytest.raises(PermissionError) as err:
+        check_output(tmp_path / "out.txt")
+    assert err.value.filename == str(tmp_path / "out.txt")
+    # the folder turned read-only between the check and the write
+    monkeypatch.setattr(atomic, "_probe", lambda target: None)
+    with pytest.raises(PermissionError) as err, atomic_write(tmp_path / "out.txt") as fh:
+        fh.write("never written")
+    assert err.value.filename == str(tmp_path / "out.txt")
+    assert list(tmp_path.iterdir()) == []

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import shutil
 
 import pytest
@@ -60,6 +61,24 @@ def test_report_shape_and_ranges(report):
         assert values["frames_per_second"] > 0 and values["seconds"] > 0
 
 
+def _without_times(report: dict) -> dict:
+    """The report with the run times (which differ from run to run) left out."""
+    if isinstance(report, dict):
+        return {k: _without_times(v) for k, v in report.items()
+                if k not in ("seconds", "frames_per_second")}
+    return report
+
+
+def test_dask_engine_gives_the_sequential_report(two_copies, report, tmp_path):
+    """The fixture ran its (sequence, tracker) tasks on a Dask LocalCluster (the default);
+    in this process, one after another, the report is the same, run times aside."""
+    pytest.importorskip("distributed", reason="the engine needs `pip install occtrack[sweep]`")
+    out = tmp_path / "sequential.json"
+    assert main(["benchmark", str(two_copies), "--json", str(out), "--quiet",
+                 "--sequential"]) == 0
+    assert _without_times(json.loads(out.read_text())) == _without_times(report)
+
+
 def test_identical_sequences_combine_to_themselves(report):
     """Two copies of one sequence: every tracker is deterministic, so both copies score the
     same, TrackEval's combination sums their counts and keeps their ratios, and the mean over
@@ -77,11 +96,12 @@ def test_identical_sequences_combine_to_themselves(report):
 
 def test_table_and_json_to_stdout(two_copies, capsys):
     seq = two_copies / "SYN-A"
-    assert main(["benchmark", str(seq), "--trackers", "none,none"]) == 0
+    assert main(["benchmark", str(seq), "--trackers", "none,none", "--sequential"]) == 0
     out = capsys.readouterr().out
     assert "SYN-A (1280x720, 10 fps, 36 frames)" in out and "Combined" not in out
     assert out.strip().splitlines()[-1].startswith(f"{LENGTH} frames, ")
-    assert main(["benchmark", str(seq), "--trackers", "object-wise", "--json", "-"]) == 0
+    assert main(["benchmark", str(seq), "--trackers", "object-wise", "--json", "-",
+                 "--sequential"]) == 0
     captured = capsys.readouterr()
     data = json.loads(captured.out)
     assert data["trackers"] == ["object-wise"] and list(data["sequences"]) == ["SYN-A"]
@@ -95,7 +115,7 @@ def test_peers_report_the_detection_boxes(tmp_path):
     make_sequence(tmp_path / "SYN", "SYN", truth_as_detections=True)
     out = tmp_path / "bench.json"
     assert main(["benchmark", str(tmp_path / "SYN"), "--trackers", ",".join(peers.PEERS),
-                 "--json", str(out), "--quiet"]) == 0
+                 "--json", str(out), "--quiet", "--sequential"]) == 0
     for values in json.loads(out.read_text())["sequences"]["SYN"]["trackers"].values():
         assert values["fp"] == 0
         assert values["loca"] == pytest.approx(1.0) and values["motp"] == pytest.approx(1.0)
@@ -109,10 +129,10 @@ def test_bad_input_is_named(tmp_path, capsys):
     assert "no such folder" in capsys.readouterr().err
     seq = tmp_path / "SEQ"
     make_sequence(seq, "SEQ")
-    assert main(["benchmark", str(seq), "--trackers", "none,deepsort"]) == 1
+    assert main(["benchmark", str(seq), "--trackers", "none,deepsort", "--sequential"]) == 1
     assert "unknown tracker 'deepsort'" in capsys.readouterr().err
     (seq / "seqinfo.ini").unlink()
-    assert main(["benchmark", str(seq), "--trackers", "none"]) == 1
+    assert main(["benchmark", str(seq), "--trackers", "none", "--sequential"]) == 1
     assert "seqinfo.ini" in capsys.readouterr().err
     assert find_sequences(seq) == [seq]
 
@@ -122,21 +142,69 @@ def test_json_file_is_kept_unless_forced(tmp_path, capsys):
     make_sequence(seq, "SEQ")
     out = tmp_path / "bench.json"
     out.write_text("keep me\n")
-    assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(out)]) == 1
+    out.chmod(0o644)
+    assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(out),
+                 "--sequential"]) == 1
     assert "exists already" in capsys.readouterr().err and out.read_text() == "keep me\n"
     assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(out), "--force",
-                 "--quiet"]) == 0
+                 "--quiet", "--sequential"]) == 0
     assert json.loads(out.read_text())["trackers"] == ["none"]
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    # written through occtrack.io.atomic: the old file's permissions, not a temporary's 0600
+    assert out.stat().st_mode & 0o777 == 0o644
+    truth = seq / "gt" / "gt.txt"
+    kept = truth.read_text()
+    assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(truth), "--force",
+                 "--quiet", "--sequential"]) == 1
+    assert f"{truth}: is also an input" in capsys.readouterr().err
+    assert truth.read_text() == kept
+
+
+def test_new_json_file_has_the_permissions_of_any_new_file(tmp_path):
+    seq = tmp_path / "SEQ"
+    make_sequence(seq, "SEQ")
+    out = tmp_path / "bench.json"
+    umask = os.umask(0o022)
+    try:
+        assert main(["benchmark", str(seq), "--trackers", "none", "--json", str(out),
+                     "--quiet", "--sequential"]) == 0
+    finally:
+        os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o644
 
 
 def test_without_the_peers_extra(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(peers, "available", lambda: False)
     seq = tmp_path / "SEQ"
     make_sequence(seq, "SEQ")
-    assert main(["benchmark", str(seq), "--trackers", "none,bytetrack"]) == 1
+    assert main(["benchmark", str(seq), "--trackers", "none,bytetrack", "--sequential"]) == 1
     assert 'pip install "occtrack[peers]"' in capsys.readouterr().err
-    assert main(["benchmark", str(seq), "--json", "-"]) == 0
+    assert main(["benchmark", str(seq), "--json", "-", "--sequential"]) == 0
     captured = capsys.readouterr()
     assert json.loads(captured.out)["trackers"] == list(MODELS)
     assert "note: the peers" in captured.err and "occtrack[peers]" in captured.err
+
+
+def test_failed_run_is_named_and_the_others_finish(tmp_path, capsys, monkeypatch):
+    """A run that raises (here a tracker made to fail on one sequence) is named with its
+    tracker and sequence after every other run finished; the exit status is 1."""
+    make_sequence(tmp_path / "GOOD", "GOOD")
+    make_sequence(tmp_path / "BAD", "BAD")
+    from occtrack.experiments import benchmark
+
+    ran = []
+    real = benchmark.track_with_states
+
+    def track(name, seq):
+        ran.append((name, seq.name))
+        if seq.name == "BAD" and name == "none":
+            raise FloatingPointError("made to fail")
+        return real(name, seq)
+
+    monkeypatch.setattr(benchmark, "track_with_states", track)
+    assert main(["benchmark", str(tmp_path), "--trackers", "none,object-wise",
+                 "--sequential"]) == 1
+    err = capsys.readouterr().err
+    assert "1 of 4 runs failed (the others finished)" in err
+    assert f"none on {(tmp_path / 'BAD').resolve()}: FloatingPointError: made to fail" in err
+    assert len(ran) == 4

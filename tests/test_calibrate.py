@@ -187,3 +187,38 @@ def test_mot17_04_real_detections(mot17_04, tmp_path, capsys):
     TrackerConfig.from_toml(out)
     assert 0.005 < data["edge_noise"] < 0.1
     assert data["clutter_rate"] > 0 and data["clutter_score_power"] >= 0
+
+
+def _static_people(people: int, frames: int, keep: np.ndarray) -> tuple[MotTable, MotTable]:
+    """People standing apart in full view, detected exactly where `keep` (frames, people)."""
+    gt = scene(0, frames=frames, cols=people, rows=1)
+    gt = MotTable(gt.frame, gt.id, gt.box, gt.score, gt.cls, np.ones(len(gt.frame)))
+    rows = np.flatnonzero(keep.ravel())
+    det = MotTable(gt.frame[rows], np.full(len(rows), -1), gt.box[rows],
+                   np.full(len(rows), 0.9), np.full(len(rows), -1), np.full(len(rows), -1.0))
+    return gt, det
+
+
+def test_tracked_detectability_is_p_d_when_misses_are_independent():
+    """Misses drawn independently: having been detected lately says nothing, so P(hit | hit
+    within the horizon) is P_D itself, and `occlusion = none` gets it."""
+    frames, people, p = 300, 12, 0.7
+    keep = np.random.default_rng(5).random((frames, people)) < p
+    gt, det = _static_people(people, frames, keep)
+    cal = calibrate([Labelled("IID", gt, det, SIZE, 30.0, frames)])
+    assert cal.detection_tracked.covers(p) and cal.detection_overall.covers(p)
+    assert cal.settings(occlusion=False)["detectability"] == cal.detection_tracked.value
+
+
+def test_tracked_detectability_leaves_out_people_lost_long_ago():
+    """Each person seen for 60 frames, then hidden for 60: half the rows are misses, but the
+    tracker (horizon 0.67 s = 20 frames at 30 fps) holds a person from the second hit of a
+    run (the first follows 60 misses, or nothing) to the 20th miss after it: 59 of those 79
+    rows a cycle are hits."""
+    frames, people = 480, 6
+    keep = np.tile((np.arange(frames) // 60 % 2 == 0)[:, None], (1, people))
+    gt, det = _static_people(people, frames, keep)
+    cal = calibrate([Labelled("RUNS", gt, det, SIZE, 30.0, frames)])
+    assert cal.detection_overall.value == pytest.approx(0.5)
+    assert cal.detection_tracked.value == pytest.approx(59 / 79)
+    assert cal.settings(occlusion=True)["detectability"] == pytest.approx(0.5)

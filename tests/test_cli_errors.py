@@ -214,7 +214,7 @@ def test_occlusion_names_match_the_tracker():
     assert OCCLUSION_NAMES == TRACKER_NAMES
 
 
-HEAVY = ("numpy", "scipy", "matplotlib", "trackeval", "motmetrics", "pandas", "tqdm",
+HEAVY = ("numpy", "scipy", "numba", "matplotlib", "trackeval", "motmetrics", "pandas", "tqdm",
          "occtrack.tracker")
 
 PROBE = """

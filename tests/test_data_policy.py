@@ -74,3 +74,19 @@ def test_no_test_names_an_absolute_data_path():
                  for n, line in enumerate(path.read_text().splitlines(), 1)
                  if pattern.search(line) and path.name != Path(__file__).name]
     assert offenders == []
+
+
+def test_pytest_q_ends_with_the_summary_line_ci_reads():
+    """CI judges a run by pytest's closing 'N passed' line, which `pytest -q` prints but
+    `pytest -qq` does not: the project's addopts must not add a -q of its own."""
+    environment = {k: v for k, v in os.environ.items()
+                   if not k.startswith(("PYTEST_", "XDIST_"))}
+    environment["PYTHONPATH"] = os.pathsep.join(
+        [str(TESTS.parent / "src"), *filter(None, [os.environ.get("PYTHONPATH")])])
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                           "-p", "no:xdist", "-p", "no:randomly",
+                           "tests/test_cli_errors.py::test_occlusion_names_match_the_tracker"],
+                          cwd=TESTS.parent, env=environment, capture_output=True, text=True,
+                          timeout=120)
+    last = done.stdout.strip().splitlines()[-1]
+    assert re.fullmatch(r"1 passed in [\d.]+s", last), done.stdout + done.stderr

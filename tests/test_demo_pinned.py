@@ -1,4 +1,5 @@
-"""The demo's printed scores are the README's, and the demo is the same run by seed."""
+"""The demo's printed scores are the README's. (That it repeats byte for byte by seed, in
+fresh processes, is tests/test_determinism.py's.)"""
 
 from __future__ import annotations
 
@@ -33,8 +34,8 @@ def demo_json(capsys) -> dict:
     return json.loads(capsys.readouterr().out)
 
 
-def test_demo_prints_the_readme_scores_and_repeats_by_seed(capsys):
-    first, second = demo_json(capsys), demo_json(capsys)
+def test_demo_prints_the_readme_scores(capsys):
+    first = demo_json(capsys)
     rows = readme_rows()
     assert sorted(rows) == ["measurement-wise", "none", "object-wise"]
     for name, printed in rows.items():
@@ -42,6 +43,6 @@ def test_demo_prints_the_readme_scores_and_repeats_by_seed(capsys):
         assert printed[:5] == [f"{got['mota']:.3f}", f"{got['idf1']:.3f}",
                                str(got["id_switches"]), f"{got['gospa_per_frame']:.3f}",
                                str(got["tracks"])], name
-        for key in ("mota", "idf1", "id_switches", "gospa_per_frame", "tracks"):
-            assert second["trackers"][name][key] == got[key]
-    assert second["detector"] == first["detector"]
+    detector = first["detector"]
+    assert (f"detector: recall {detector['recall']:.3f}, precision "
+            f"{detector['precision']:.3f}\n") in README.read_text(encoding="utf-8")

@@ -268,6 +268,29 @@ def test_empty_result(tmp_path):
     assert paper["mota"] is None and paper["fp"] == 6 and paper["fn"] == 0
 
 
+@pytest.mark.parametrize("gt,message", [
+    ("", "ground truth has no rows, so the metrics are undefined"),
+    # a distractor (class 8) and an unconsidered pedestrian (flag 0): neither protocol scores
+    ("1,3,200,0,10,10,0,8,1\n1,4,0,0,10,10,0,1,1\n",
+     "none of the ground truth's 2 rows is a box the {protocol} protocol scores"),
+])
+def test_ground_truth_with_nothing_to_score_is_undefined_not_zero(tmp_path, capsys, gt,
+                                                                  message):
+    gt_table, result = tables(tmp_path, gt, RESULT)
+    for protocol in ("paper", "mot17"):
+        expected = message.format(protocol=protocol)
+        with pytest.raises(OcctrackError, match=expected) as err:
+            evaluate(gt_table, result, protocol, num_frames=3)
+        assert str(err.value).startswith(f"{tmp_path / 'gt.txt'}: ")
+        for json_flag in ((), ("--json",)):
+            code, out, err_text = run_cli(capsys, tmp_path / "gt.txt", tmp_path / "result.txt",
+                                          "--protocol", protocol, *json_flag)
+            assert code == 1 and out == ""
+            assert err_text.startswith(f"occtrack eval: error: {tmp_path / 'gt.txt'}: "
+                                       f"{expected}")
+            assert err_text.count("\n") == 1 and "scored box" in err_text
+
+
 @pytest.mark.parametrize("result,message", [
     ("1,10,0,0,10,10,1\n1,10,5,0,10,10,1\n", "result has id 10 twice in frame 1"),
     ("1,-1,0,0,10,10,0.9\n", "negative id -1 in frame 1 (a detection file?"),

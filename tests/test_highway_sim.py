@@ -5,17 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from occtrack.errors import OcctrackError
-from occtrack.highway.config import RoadConfig, SimulationConfig, TrackerConfig, load_config
-from occtrack.highway.sensor import (
-    MeasurementModel,
-    Scan,
-    locate,
-    occlude,
-    sense,
-    union,
+from occtrack.config.highway import (
+    HighwayTrackerConfig,
+    RoadConfig,
+    SimulationConfig,
+    load_highway,
 )
-from occtrack.highway.simulate import Cars, Traffic, cars_overlap, simulate
+from occtrack.errors import OcctrackError
+from occtrack.models.highway_sensor import MeasurementModel, Scan
+from occtrack.occlusion.extents import locate, occlude, union
+from occtrack.scenarios.highway import Cars, Traffic, cars_overlap, sense, simulate
 
 SIM = SimulationConfig()
 
@@ -114,7 +113,7 @@ def test_reported_ends_are_in_order_and_where_the_car_is(mode, object_wise, meas
 
 
 def test_measurement_wise_hidden_spans_are_the_nearer_lanes_shadows(measurement_wise):
-    model = MeasurementModel(TrackerConfig.matching(SIM))
+    model = MeasurementModel(HighwayTrackerConfig.matching(SIM))
     checked = 0
     for _, scan in measurement_wise[:400]:
         parts = model.occluded_parts(scan)
@@ -158,7 +157,7 @@ def test_empty_road(mode):
     scans = [sense(empty, noisy, mode, rng) for _ in range(50)]
     assert sum(len(s) for s in scans) > 0
     assert all(np.all(s.source == -1) for s in scans)
-    model = MeasurementModel(TrackerConfig.matching(SIM))
+    model = MeasurementModel(HighwayTrackerConfig.matching(SIM))
     assert np.all(model.clutter_density(Scan.empty()) == 0)
     q = model.hidden_probability(np.array([1, 2]), np.array([0.0, 1.0]), np.array([3.0, 4.0]),
                                  Scan.empty())
@@ -187,7 +186,7 @@ def test_hidden_probability_matches_monte_carlo():
     """q from the measured nearer shapes against how often the simulator's measurement-wise
     sensor hides the car: mean(1[hidden] - q) within 3 standard errors of 0, per car."""
     config = SimulationConfig(clutter_rate=0.0, detection_probability=1.0)
-    model = MeasurementModel(TrackerConfig.matching(config))
+    model = MeasurementModel(HighwayTrackerConfig.matching(config))
     # An occluder in lane 1 and, behind it, cars that are hidden only some of the time.
     cars = Cars(id=np.arange(5), lane=np.array([0, 1, 1, 2, 3]),
                 left=np.array([-2.0, -3.6, 3.5, -4.9, -10.0]),
@@ -210,7 +209,7 @@ def test_hidden_probability_matches_monte_carlo():
 
 def test_likelihood_is_a_density_over_seen_ends():
     """For a car that nothing hides, p(z | car) integrates to 1 over ordered pairs of ends."""
-    model = MeasurementModel(TrackerConfig.matching(SIM))
+    model = MeasurementModel(HighwayTrackerConfig.matching(SIM))
     grid = np.linspace(-8, 12, 801)
     step = grid[1] - grid[0]
     zl, zr = np.meshgrid(grid, grid, indexing="ij")
@@ -225,7 +224,7 @@ def test_likelihood_is_a_density_over_seen_ends():
 
 
 def test_clutter_density_integrates_hidden_ends():
-    model = MeasurementModel(TrackerConfig.matching(SIM))
+    model = MeasurementModel(HighwayTrackerConfig.matching(SIM))
     half, lmin, lmax = SIM.road.half_length, SIM.clutter_min_length, SIM.clutter_max_length
     c = 1.0 / (SIM.road.n_lanes * 2 * half * (lmax - lmin))
     scan = Scan(lane=np.array([1, 1, 2, 3]),
@@ -247,22 +246,22 @@ def test_clutter_density_integrates_hidden_ends():
 
 
 def test_config_validation_and_toml(tmp_path):
-    with pytest.raises(OcctrackError):
-        SimulationConfig(noise_std=-1.0).validate()
-    with pytest.raises(OcctrackError):
-        RoadConfig(lanes_right=0, lanes_left=0).validate()
+    with pytest.raises(ValueError, match=r"noise_std must be a number in \(0, 1000\]"):
+        SimulationConfig(noise_std=-1.0)
+    with pytest.raises(ValueError, match="at least one lane"):
+        RoadConfig(lanes_right=0, lanes_left=0)
     good = tmp_path / "h.toml"
     good.write_text("[simulation]\nclutter_rate = 0.3\n[simulation.road]\nhalf_length = 40.0\n"
                     "[tracker]\nparticles = 128\n")
-    sim, tracker = load_config(good)
+    sim, tracker = load_highway(good)
     assert sim.clutter_rate == 0.3 and tracker.clutter_rate == 0.3
     assert sim.road.half_length == 40.0 and tracker.road.half_length == 40.0
     assert tracker.particles == 128
     bad = tmp_path / "bad.toml"
     bad.write_text("[tracker]\nparticle = 12\n")
     with pytest.raises(OcctrackError, match="tracker.particle"):
-        load_config(bad)
+        load_highway(bad)
     nan = tmp_path / "nan.toml"
     nan.write_text("[simulation]\nnoise_std = nan\n")
     with pytest.raises(OcctrackError):
-        load_config(nan)
+        load_highway(nan)

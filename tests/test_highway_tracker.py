@@ -5,9 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from occtrack.config.highway import HighwayTrackerConfig, SimulationConfig
 from occtrack.errors import OcctrackError
-from occtrack.highway.config import SimulationConfig, TrackerConfig
-from occtrack.highway.occlusion import (
+from occtrack.experiments.highway import evaluate
+from occtrack.filters.particle_tomb import Estimates, HighwayTracker, systematic_resample
+from occtrack.metrics.highway import ScoreAccumulator, distances, step_gospa
+from occtrack.models.highway_sensor import MeasurementModel, Scan
+from occtrack.occlusion.base import OcclusionTerms
+from occtrack.occlusion.extents import occlude
+from occtrack.occlusion.highway import (
     TRACKER_NAMES,
     HighwayContext,
     ObjectWiseExpval,
@@ -15,15 +21,11 @@ from occtrack.highway.occlusion import (
     _track_extents,
     make_occlusion,
 )
-from occtrack.highway.score import ScoreAccumulator, distances, evaluate, step_gospa
-from occtrack.highway.sensor import MeasurementModel, Scan, occlude
-from occtrack.highway.simulate import Cars, simulate
-from occtrack.highway.tracker import Estimates, HighwayTracker, systematic_resample
-from occtrack.occlusion.base import OcclusionTerms
+from occtrack.scenarios.highway import Cars, simulate
 
 SIM = SimulationConfig()
-SMALL = TrackerConfig.matching(SIM, particles=96, undetected_particles=64, birth_particles=64,
-                               max_tracks=24)
+SMALL = HighwayTrackerConfig.matching(SIM, particles=96, undetected_particles=64,
+                                      birth_particles=64, max_tracks=24)
 
 
 def _run(tracker: str, sensor: str, steps: int, seed: int, config=SMALL):
@@ -66,7 +68,7 @@ def test_tracker_follows_a_lone_car(seed):
     measurements, the exact posterior mean but for the prior (which here adds only the entry
     band's information about the first position)."""
     config = SimulationConfig(clutter_rate=0.0)
-    filt = HighwayTracker(TrackerConfig.matching(config, particles=512), "measurement-wise",
+    filt = HighwayTracker(HighwayTrackerConfig.matching(config, particles=512), "measurement-wise",
                           seed)
     rng = np.random.default_rng(seed)
     left, length, v = 28.5, 4.5, -2.0
@@ -114,7 +116,7 @@ def test_hidden_track_survives_only_with_occlusion_handling():
             return OcclusionTerms(np.ones(len(ctx.means)), np.zeros(len(ctx.means)))
 
     for handler, survives in (("measurement-wise", True), (Blind(), False)):
-        filt = HighwayTracker(TrackerConfig.matching(config, particles=256), handler, 2)
+        filt = HighwayTracker(HighwayTrackerConfig.matching(config, particles=256), handler, 2)
         far_existence = []
         for t, scan in frames:
             filt.step(scan)

@@ -16,7 +16,7 @@ import pytest
 # the tracker package first: importing gmpmb alone runs into the circular import
 # gmpmb -> tracker.config -> tracker/__init__ -> tracker.tracker -> gmpmb
 import occtrack.tracker  # noqa: F401
-from occtrack.filters.gmpmb import N_BIRTH, GaussianMixturePMB
+from occtrack.filters.gmpmb import INITIAL_POOL, INITIAL_SLOTS, N_BIRTH, GaussianMixturePMB
 from occtrack.models.box import edges_from_ltwh
 from occtrack.occlusion.base import NoOcclusion, OcclusionTerms
 from occtrack.tracker import TrackerConfig
@@ -130,7 +130,9 @@ def test_select_keeps_the_heaviest_children_when_over_capacity():
 def test_select_keeps_exactly_the_heaviest_of_many(seed):
     f = make(capacity=64)
     flat = np.random.default_rng(seed).random(2000)
-    assert np.array_equal(f._select(flat), np.sort(np.argsort(-flat)[:64 - N_BIRTH]))
+    with pytest.warns(RuntimeWarning, match="capacity = 64 .* the 1941 lightest"):
+        keep = f._select(flat)
+    assert np.array_equal(keep, np.sort(np.argsort(-flat)[:64 - N_BIRTH]))
 
 
 def test_select_below_capacity_only_prunes():
@@ -171,6 +173,100 @@ def test_an_update_over_capacity_keeps_the_heaviest_children_unscaled(monkeypatc
     monkeypatch.undo()
     f._update(z, f.measurement.observed(z), np.ones(3))
     assert f.n == 16 - N_BIRTH and (f.existence() <= 1).all()
+
+
+def test_a_growing_pool_doubles_and_keeps_every_component():
+    """capacity = 0: the pool's arrays at least double when they grow, keep the components
+    they hold (values and dtypes), and a new entry is empty (label -1: no Bernoulli)."""
+    f = make(capacity=0)
+    assert len(f.mass) == INITIAL_POOL
+    load(f, [0.5, 0.3, 0.2], [0, -1, 1], det=0.7, occ=0.4)
+    f.coast[:3] = [0.0, 0.5, 1.0]
+    before = {name: getattr(f, name).copy() for name in f._POOL}
+    same = {name: getattr(f, name) for name in f._POOL}
+    f._reserve(INITIAL_POOL)  # fits: the very same arrays
+    assert all(getattr(f, name) is same[name] for name in f._POOL)
+    f._reserve(INITIAL_POOL + 1)
+    for name in f._POOL:
+        arr = getattr(f, name)
+        assert len(arr) == 2 * INITIAL_POOL and arr.dtype == before[name].dtype
+        assert arr.shape[1:] == before[name].shape[1:]
+        assert np.array_equal(arr[:3], before[name][:3])
+        assert (arr[3:] == (-1 if name == "label" else 0)).all()
+    f._reserve(5 * len(f.mass))  # more than double: exactly what is asked
+    assert len(f.mass) == len(f.label) == 10 * INITIAL_POOL
+    assert np.array_equal(f.cov[:3], before["cov"][:3]) and (f.label[3:] == -1).all()
+
+
+def test_label_slots_grow_and_keep_every_slot():
+    """max_labels = 0: the slot arrays at least double, every old slot (used or not) is kept,
+    and a new slot is unused with no detection and no serial (-1)."""
+    f = make(max_labels=0)
+    assert len(f.slot_used) == INITIAL_SLOTS
+    f.slot_used[[0, 2]] = True
+    f.slot_age[:3], f.slot_hits[:3], f.slot_coast[:3] = [4, 9, 2], [3, 7, 1], [0.0, 0.2, 0.4]
+    f.slot_detection[:3], f.slot_serial[:3], f.slot_class[:3] = [1, -1, 0], [0, 1, 2], [2, 0, 5]
+    f.slot_hidden[:3] = [0.0, 0.3, 0.9]
+    before = {name: getattr(f, name).copy() for name in f._SLOTS}
+    f._reserve_slots(INITIAL_SLOTS)
+    assert all(np.array_equal(getattr(f, name), before[name]) for name in f._SLOTS)
+    assert len(f.slot_used) == INITIAL_SLOTS
+    f._reserve_slots(INITIAL_SLOTS + 1)
+    empty = {"slot_detection": -1, "slot_serial": -1}
+    for name in f._SLOTS:
+        arr = getattr(f, name)
+        assert len(arr) == 2 * INITIAL_SLOTS and arr.dtype == before[name].dtype
+        assert np.array_equal(arr[:INITIAL_SLOTS], before[name])
+        assert (arr[INITIAL_SLOTS:] == empty.get(name, 0)).all()
+    f._reserve_slots(1000)
+    assert len(f.slot_used) == len(f.slot_hidden) == 1000
+    assert np.array_equal(f.slot_serial[:3], [0, 1, 2]) and (f.slot_serial[3:] == -1).all()
+
+
+def test_more_new_bernoullis_than_slots_get_a_label_each_when_labels_grow():
+    """40 new Bernoullis and 32 slots, no hard limit: every one gets its own slot and a new
+    serial, and nothing is reported."""
+    f = make(max_labels=0)
+    f.slot_used[0] = True
+    f.slot_serial[0], f._next_serial = 0, 1
+    mass = np.append(np.linspace(0.2, 0.6, 40), 0.9)
+    label = np.append(np.full(40, -1), 0)
+    newborn = np.append(np.arange(40), -1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = f._assign_labels(mass, label, newborn, 40)
+    assert out[-1] == 0 and len(set(out[:40].tolist())) == 40 and (out[:40] > 0).all()
+    assert len(f.slot_used) == 2 * INITIAL_SLOTS and f.slot_used.sum() == 41
+    assert sorted(f.slot_serial[out[:40]].tolist()) == list(range(1, 41))
+    assert (f.slot_age[out[:40]] == 1).all() and (f.slot_hits[out[:40]] == 1).all()
+    assert f.slot_detection[out[:40]].tolist() == list(range(40))
+
+
+def test_a_growing_pool_tracks_exactly_as_a_large_fixed_one():
+    """Growth must change nothing but memory: 254 components, the births that overflow the
+    initial 256 and an update with three detections give the same pool, bit for bit, as a
+    capacity far from its limit, and no warning."""
+    rng = np.random.default_rng(5)
+    n = INITIAL_POOL - 2
+    means = np.stack([person(x, y) for x, y in zip(rng.uniform(100, 1800, n),
+                                                   rng.uniform(200, 900, n), strict=True)])
+    mass = rng.uniform(0.001, 0.02, n)
+    label = np.where(np.arange(n) < 6, np.arange(n) % 3, -1)
+    z = np.concatenate([edges(means[k]) for k in (0, 1, 2)])
+    pools = []
+    for f in (make(capacity=0, max_labels=0), make(capacity=4096, max_labels=4096)):
+        load(f, mass, label, means)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            f._add_births()
+            grown = f.n
+            f._update(z, f.measurement.observed(z), np.ones(3))
+        pools.append((grown, f.n, [getattr(f, a)[:f.n].copy() for a in f._POOL],
+                      f.existence()[:INITIAL_SLOTS]))
+    (grown, n_grow, pool_grow, r_grow), (fixed, n_fixed, pool_fixed, r_fixed) = pools
+    assert grown == fixed > INITIAL_POOL and n_grow == n_fixed > INITIAL_POOL
+    assert all(np.array_equal(a, b) for a, b in zip(pool_grow, pool_fixed, strict=True))
+    assert np.array_equal(r_grow, r_fixed)
 
 
 # -- trimming ---------------------------------------------------------------------------------
@@ -419,6 +515,41 @@ def test_a_weak_bernoulli_is_recycled_into_the_poisson_part_with_its_mass():
     assert f.existence()[0] == pytest.approx(0.4 / 0.6, rel=1e-12)
 
 
+def test_n_of_m_confirmation_deletes_exactly_the_bernoullis_that_cannot_make_it():
+    """confirm_hits 3 of confirm_window 5: a Bernoulli is deleted once its hits plus the
+    frames left in its window fall below 3; its components go (no recycling), the Poisson
+    part and the other objects stay, and slots not in use are not touched."""
+    f = make(max_labels=8)
+    f.slot_used[:] = [True, True, True, True, True, False, True, True]
+    # slot:               0  1  2  3  4  5  6   7
+    f.slot_age[:] = [2, 4, 5, 5, 4, 9, 30, 1]
+    f.slot_hits[:] = [1, 1, 2, 3, 2, 0, 3, 0]
+    # hits + frames left: 4, 2, 2, 3, 3, -, 3, 4: slots 1 and 2 are doomed (3 is enough)
+    label = np.array([-1, 0, 1, 1, 2, 3, 4, 6, 7, -1])
+    keep = f._confirm_or_delete(label)
+    assert keep.tolist() == [True, True, False, False, False, True, True, True, True, True]
+    assert f.slot_used.tolist() == [True, False, False, True, True, False, True, True]
+    f.slot_age[:] = 5  # nothing left to delete: every component kept, no slot changed
+    f.slot_hits[:] = 3
+    assert f._confirm_or_delete(label).tolist() == [True] * 10
+    assert f.slot_used.tolist() == [True, False, False, True, True, False, True, True]
+
+
+def test_an_unconfirmed_bernoulli_missed_out_of_its_window_is_deleted_with_its_mass():
+    """No detections. Object 1 was detected twice in its first four frames: missed in the
+    fifth, it can no longer reach 3 hits of 5 and goes, mass and all (the Poisson part does
+    not receive it); object 0 is confirmed and stays."""
+    f = make()
+    load(f, [0.8, 0.6, 0.5], [0, 1, -1], det=0.5)
+    f.slot_age[1], f.slot_hits[1] = 4, 2
+    f._update(*EMPTY)
+    g = groups(f)
+    assert f.slot_used.tolist() == [True, False, False, False] and sorted(g) == [-1, 0]
+    assert f.mass[g[-1]].sum() == pytest.approx(0.5 * 0.5, rel=1e-12)
+    assert f.existence()[0] == pytest.approx(0.4 / 0.6, rel=1e-12)
+    assert f.slot_age[0] == f.config.confirm_window + 1 and f.slot_hits[0] == 3
+
+
 # -- detectability and occludability ----------------------------------------------------------
 
 
@@ -627,6 +758,7 @@ def test_birth_size_prior_from_settings_defaults_and_detections():
     assert g._size_prior()[1].tolist() == [1.0, 1.0]
 
 
+@pytest.mark.filterwarnings("ignore:capacity = 16")
 def test_a_new_filter_is_empty_and_counts_its_steps():
     f = make(border_margin=5.0)
     assert (f.n, f.steps, f.iterations) == (0, 0, 0) and not f.slot_used.any()

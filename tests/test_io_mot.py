@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import (
     MotTable,
+    check_gaps,
     first_duplicate,
     read_detections,
     read_mot,
@@ -184,3 +190,251 @@ def test_duplicate_keys_cannot_overflow():
                      np.ones(3))
     assert check_tables(table, table) == 8
     assert first_duplicate(np.array([8, 1, 8]), np.array([big, 5, big])) == (0, 2)
+
+
+# -- what the mutation run of io/mot.py showed untested (benchmarks/mutation.py --modules io-mot)
+
+
+def test_trailing_empty_columns_blank_lines_and_a_bom_are_not_rows(tmp_path):
+    """TrackEval's files may end rows with empty columns ("...,0.9,,,"), hold blank lines
+    anywhere and start with a byte-order mark: none of these is data, and no row after a
+    blank line is lost; lines keep their numbers in the file."""
+    text = ("\ufeff1,-1,0,0,5,5,0.9,,,\n"
+            "\n"
+            "  \n"
+            "2,-1,1,0,5,5,0.8,,\n"
+            "3,-1,2,0,5,5,,\n"
+            "4,-1,3,0,5,5,0.7,-1,-1,not-a-number, neither\n")
+    table = read_mot(write(tmp_path, text), "det")
+    assert table.frame.tolist() == [1, 2, 3, 4] and table.line.tolist() == [1, 4, 5, 6]
+    assert table.score.tolist() == [0.9, 0.8, 1.0, 0.7]  # no score column: 1
+    assert table.box[:, 0].tolist() == [0, 1, 2, 3]
+
+
+def test_only_a_leading_byte_order_mark_is_dropped(tmp_path):
+    with pytest.raises(OcctrackError, match=r"f.txt:1: column 1 is not a number: 'X1'"):
+        read_mot(write(tmp_path, "X1,-1,0,0,5,5,1\n"), "det")
+    with pytest.raises(OcctrackError, match=r"f.txt:1: column 7 is not a number"):
+        read_mot(write(tmp_path, "1,-1,0,0,5,5,1\ufeff\n"), "det")
+
+
+def test_a_short_row_is_quoted_by_its_first_60_characters(tmp_path):
+    line = "1 " + "x" * 80
+    with pytest.raises(OcctrackError) as err:
+        read_mot(write(tmp_path, line + "\n"), "det")
+    assert str(err.value) == (f"{tmp_path / 'f.txt'}:1: expected at least 6 columns (frame, id, "
+                              f"left, top, width, height), found 2: {line[:60]!r}")
+
+
+def test_a_directory_and_a_binary_file_are_named(tmp_path):
+    with pytest.raises(OcctrackError) as err:
+        read_mot(tmp_path, "gt")
+    assert str(err.value) == f"{tmp_path}: is a directory, expected a MOTChallenge text file"
+    binary = tmp_path / "b.txt"
+    binary.write_bytes(b"1,-1,0,0,5,5,1\n\xff\xfe1,2")
+    with pytest.raises(OcctrackError) as err:
+        read_mot(binary, "det")
+    assert str(err.value) == f"{binary}: not a text file (byte 15 is not UTF-8)"
+
+
+def test_a_bad_kind_is_a_programming_error():
+    with pytest.raises(ValueError, match=r"kind must be one of \('det', 'gt', 'result'\)"):
+        read_mot("x.txt", "detections")
+
+
+def test_zero_and_small_boxes_are_read_but_negative_ones_named(tmp_path):
+    """read_mot refuses only negative sizes (ground truth may hold empty boxes); the message
+    gives width x height."""
+    table = read_mot(write(tmp_path, "1,1,0,0,0,0,1,1,1\n1,2,0,0,0.5,0.5,1,1,1\n"), "gt")
+    assert table.box[:, 2:].tolist() == [[0, 0], [0.5, 0.5]]
+    with pytest.raises(OcctrackError) as err:
+        read_mot(write(tmp_path, "1,1,0,0,5,5,1,1,1\n2,1,0,0,7,-3,1,1,1\n"), "gt")
+    assert str(err.value) == f"{tmp_path / 'f.txt'}:2: negative box size 7 x -3"
+
+
+def test_duplicate_gt_id_names_both_lines(tmp_path):
+    path = write(tmp_path, "2,4,0,0,5,5,1,1,1\n1,4,0,0,5,5,1,1,1\n2,4,3,3,5,5,1,1,1\n")
+    with pytest.raises(OcctrackError) as err:
+        read_mot(path, "gt")
+    assert str(err.value) == f"{path}:3: id 4 appears twice in frame 2 (lines 1 and 3)"
+
+
+def test_a_detection_files_class_column_is_free(tmp_path):
+    """read_detections reads a detection file: its unused class column may hold anything
+    numeric, as read_mot(..., "det") allows."""
+    table, warning = detections(tmp_path, "1,-1,1,1,20,50,0.5,12.75,3.5\n")
+    assert table.cls.tolist() == [-1] and warning is None
+
+
+@pytest.mark.parametrize("box,kept", [
+    ((10, 10, 0.5, 0.5), True),  # small but positive
+    ((10, 10, 20, 0), False),  # zero height
+    ((-20, 10, 20, 50), False),  # right edge on the image's left border
+    ((-19.5, 10, 20, 50), True),
+    ((10, -50, 20, 50), False),  # bottom edge on the top border
+    ((10, -49.5, 20, 50), True),
+    ((640, 10, 20, 50), False),  # left edge on the right border
+    ((639.5, 10, 20, 50), True),
+    ((10, 480, 20, 50), False),  # top edge on the bottom border
+    ((10, 479.5, 20, 50), True),
+])
+def test_a_box_needs_a_positive_size_and_some_area_inside_the_image(tmp_path, box, kept):
+    row = "1,-1," + ",".join(f"{v:g}" for v in box) + ",0.9\n"
+    table, warning = detections(tmp_path, row, lenient=True)
+    assert (len(table) == 1) == kept and (warning is None) == kept
+    if kept:
+        assert detections(tmp_path, row)[0].box.tolist() == [list(box)]
+    else:
+        with pytest.raises(OcctrackError, match="f.txt:1: box "):
+            detections(tmp_path, row)
+
+
+def test_select_keeps_every_column(tmp_path):
+    table = read_mot(write(tmp_path, "1,1,0,0,5,5,1,1,0.5\n2,2,9,9,5,5,0,7,0.25\n"), "gt")
+    two = table.select(np.array([False, True]))
+    assert (two.frame.tolist(), two.id.tolist(), two.cls.tolist()) == ([2], [2], [7])
+    assert two.box.tolist() == [[9, 9, 5, 5]] and two.score.tolist() == [0.0]
+    assert two.visibility.tolist() == [0.25] and two.line.tolist() == [2]
+    assert two.path == table.path
+    bare = MotTable(table.frame, table.id, table.box, table.score, table.cls, table.visibility)
+    assert bare.select(np.array([True, False])).line is None
+
+
+def test_gaps_at_their_limits(tmp_path):
+    """max_gap_frames empty frames are allowed, one more is not: before the first row, between
+    rows and at the end; the message counts them."""
+    assert len(read_mot(write(tmp_path, "11,-1,0,0,5,5,1\n22,-1,0,0,5,5,1\n"), "det",
+                        max_gap_frames=10)) == 2
+    with pytest.raises(OcctrackError) as err:
+        read_mot(write(tmp_path, "12,-1,0,0,5,5,1\n"), "det", max_gap_frames=10)
+    assert str(err.value).startswith(f"{tmp_path / 'f.txt'}:1: the first row is in frame 12, "
+                                     f"after 11 empty frames: more than the 10 allowed")
+    with pytest.raises(OcctrackError) as err:
+        read_mot(write(tmp_path, "1,-1,0,0,5,5,1\n13,-1,0,0,5,5,1\n"), "det", max_gap_frames=10)
+    assert str(err.value).startswith(f"{tmp_path / 'f.txt'}:2: frame 13 follows frame 1 after "
+                                     f"11 empty frames: more than the 10 allowed")
+    row = "60,-1,1,1,20,50,0.5\n"
+    assert len(detections(tmp_path, row, max_gap_frames=59, num_frames=119)[0]) == 1
+    with pytest.raises(OcctrackError) as err:
+        detections(tmp_path, row, max_gap_frames=59, num_frames=120)
+    assert str(err.value).startswith(
+        f"{tmp_path / 'f.txt'}: the last row is in frame 60 but the sequence has 120 frames "
+        f"(seqinfo.ini): 60 empty frames at the end, more than the 59 allowed")
+
+
+def test_gaps_of_a_table_not_read_from_a_file():
+    """A table built in memory (no path, no line numbers) is checked all the same."""
+    table = MotTable(np.array([1, 50]), np.array([1, 1]), np.ones((2, 4)), np.ones(2),
+                     np.ones(2, dtype=np.int64), np.ones(2))
+    with pytest.raises(OcctrackError) as err:
+        check_gaps(table, 10)
+    assert str(err.value).startswith("frame 50 follows frame 1 after 48 empty frames")
+    late = MotTable(np.array([30]), np.array([1]), np.ones((1, 4)), np.ones(1),
+                    np.ones(1, dtype=np.int64), np.ones(1))
+    with pytest.raises(OcctrackError) as err:
+        check_gaps(late, 10)
+    assert str(err.value).startswith("the first row is in frame 30, after 29 empty frames")
+    check_gaps(late, 29)
+
+
+def test_write_keeps_the_scores(tmp_path):
+    path = tmp_path / "out.txt"
+    write_mot(path, np.array([1, 1]), np.array([2, 1]), np.ones((2, 4)),
+              score=np.array([0.25, 0.125]))
+    assert [line.split(",")[6] for line in path.read_text().splitlines()] == ["0.1250", "0.2500"]
+
+
+def seqinfo(folder, body):
+    folder.mkdir(exist_ok=True)
+    (folder / "seqinfo.ini").write_text(f"[Sequence]\n{body}", encoding="utf-8")
+    return folder / "seqinfo.ini"
+
+
+def test_seqinfo_defaults_name_and_frame_rate(tmp_path):
+    seqinfo(tmp_path / "MOT17-09", "imWidth=1\nimHeight=2147483647\nseqLength=3\n")
+    assert read_seqinfo(tmp_path / "MOT17-09") == {"name": "MOT17-09", "width": 1,
+                                                   "height": 2147483647, "length": 3, "fps": 30}
+    seqinfo(tmp_path / "a", "name=S\nimWidth=640\nimHeight=480\nseqLength=9\nframeRate=14\n")
+    assert read_seqinfo(tmp_path / "a")["fps"] == 14
+
+
+@pytest.mark.parametrize("body,message", [
+    ("imWidth=0\nimHeight=480\nseqLength=9\n", "width 0 is not a positive whole number"),
+    ("imWidth=640\nimHeight=2147483648\nseqLength=9\n",
+     "height 2147483648 is not a positive whole number below 2**31"),
+    ("imWidth=640\nimHeight=480\nseqLength=-1\n", "length -1 is not a positive"),
+    ("imWidth=640\nimHeight=480\nseqLength=9\nframeRate=0.5\n", "fps 0 is not a positive"),
+    ("imWidth=640\nimHeight=480\n", "malformed seqinfo.ini: 'seqLength'"),
+    ("imHeight=480\nseqLength=9\n", "malformed seqinfo.ini: 'imWidth'"),
+    ("imWidth=640\nseqLength=9\n", "malformed seqinfo.ini: 'imHeight'"),
+    ("imWidth=640\nimHeight=480\nseqLength=many\n", "malformed seqinfo.ini: invalid literal"),
+])
+def test_malformed_seqinfo_is_named(tmp_path, body, message):
+    ini = seqinfo(tmp_path, body)
+    with pytest.raises(OcctrackError) as err:
+        read_seqinfo(tmp_path)
+    assert str(err.value).startswith(f"{ini}: malformed seqinfo.ini: ") and message in str(
+        err.value)
+
+
+def test_missing_seqinfo_is_named(tmp_path):
+    with pytest.raises(OcctrackError) as err:
+        read_seqinfo(tmp_path)
+    assert str(err.value) == f"{tmp_path / 'seqinfo.ini'}: no seqinfo.ini here"
+
+
+def test_files_are_read_as_utf8_whatever_the_locale(tmp_path):
+    """Under the C locale without UTF-8 mode, Python's default encoding is ASCII: a detection
+    file with a byte-order mark and a seqinfo.ini with a non-ASCII name must still read."""
+    (tmp_path / "det.txt").write_bytes("\ufeff1,-1,0,0,5,5,0.9\n".encode())
+    seqinfo(tmp_path, "name=Straße\nimWidth=640\nimHeight=480\nseqLength=9\n")
+    # as read here (whatever this process's locale), and as read under the C locale below
+    assert len(read_mot(tmp_path / "det.txt", "det")) == 1
+    assert read_seqinfo(tmp_path)["name"] == "Straße"
+    script = ("import locale, sys\n"
+              "from occtrack.io.mot import read_mot, read_seqinfo\n"
+              "print(locale.getpreferredencoding(False))\n"
+              "print(len(read_mot(sys.argv[1] + '/det.txt', 'det')))\n"
+              "print(ascii(read_seqinfo(sys.argv[1])['name']))\n")
+    env = {**os.environ, "LC_ALL": "C", "LANG": "C", "PYTHONCOERCECLOCALE": "0",
+           "PYTHONUTF8": "0", "PYTHONPATH": os.pathsep.join(
+               [str(Path(__file__).resolve().parents[1] / "src"),
+                os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, "-X", "utf8=0", "-c", script, str(tmp_path)],
+                          env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    encoding, rows, name = done.stdout.split()
+    assert encoding.lower().replace("-", "").replace("_", "") != "utf8"  # the premise
+    assert (rows, name) == ("1", ascii("Straße"))
+
+
+def test_class_and_visibility_columns_when_present(tmp_path):
+    """Eight columns: the class without a visibility (-1); seven: neither. A detection file's
+    class is kept when it is a whole number in the id range, whatever the visibility."""
+    gt = read_mot(write(tmp_path, "1,1,0,0,5,5,1,7\n1,2,0,0,5,5,0\n1,3,0,0,5,5,1,2,0.5\n"), "gt")
+    assert gt.cls.tolist() == [7, -1, 2] and gt.visibility.tolist() == [-1.0, -1.0, 0.5]
+    det = read_mot(write(tmp_path, "1,-1,0,0,5,5,0.9,3\n"
+                                   "1,-1,0,0,5,5,0.9,3,0.5\n"
+                                   "1,-1,0,0,5,5,0.9,5,3e10\n"
+                                   "1,-1,0,0,5,5,0.9,-2147483648,1\n"
+                                   "1,-1,0,0,5,5,0.9,2147483647,1\n"
+                                   "1,-1,0,0,5,5,0.9,2147483648,1\n", "d.txt"), "det")
+    assert det.cls.tolist() == [3, 3, 5, -2147483648, 2147483647, -1]
+    assert det.visibility.tolist() == [-1.0, 0.5, 3e10, 1.0, 1.0, 1.0]
+
+
+def test_a_fractional_class_of_ground_truth_is_named_by_line(tmp_path):
+    path = write(tmp_path, "1,1,0,0,5,5,1,1,1\n1,2,0,0,5,5,1,1.5,1\n")
+    with pytest.raises(OcctrackError) as err:
+        read_mot(path, "gt")
+    assert str(err.value) == f"{path}:2: class 1.5 is not a whole number"
+
+
+def test_an_empty_file_gives_empty_integer_columns(tmp_path):
+    """No rows: the columns keep their types, so frame and line numbers still index and
+    count (np.bincount refuses float arrays)."""
+    table = read_mot(write(tmp_path, "\n"), "gt")
+    assert len(table) == 0 and table.num_frames == 0 and table.box.shape == (0, 4)
+    for column in (table.frame, table.id, table.cls, table.line):
+        assert column.dtype == np.int64
+    assert np.bincount(table.frame).tolist() == [] and table.frame_slices(2)[1].tolist() == []

@@ -50,19 +50,60 @@ def test_exact_on_tree_structured_problems(seed):
     assert max_error(lbp, exact_marginals(*problem)) < 1e-9
 
 
-def test_within_stated_bound_on_small_loopy_problems():
+def bethe_reference(w_hit, w_miss, w_new, tol=1e-14, max_iter=100_000):
+    """Williams and Lau's message iteration, written out pair by pair as in their paper
+    (no scaling, no vectorising): the fixed point that any implementation of LBP for this
+    problem must reach, and its marginals."""
+    n, m = w_hit.shape
+    nu = [[1.0] * n for _ in range(m)]  # nu[j][i]: measurement j to object i
+    mu = [[0.0] * m for _ in range(n)]  # mu[i][j]: object i to measurement j
+    for _ in range(max_iter):
+        for i in range(n):
+            for j in range(m):
+                mu[i][j] = w_hit[i, j] / (w_miss[i] + sum(w_hit[i, k] * nu[k][i]
+                                                          for k in range(m) if k != j))
+        change = 0.0
+        for j in range(m):
+            for i in range(n):
+                new = 1.0 / (w_new[j] + sum(mu[k][j] for k in range(n) if k != i))
+                change = max(change, abs(new - nu[j][i]) / new)
+                nu[j][i] = new
+        if change < tol:
+            break
+    denom = [w_miss[i] + sum(w_hit[i, j] * nu[j][i] for j in range(m)) for i in range(n)]
+    p_hit = np.array([[w_hit[i, j] * nu[j][i] / denom[i] for j in range(m)] for i in range(n)])
+    p_miss = np.array([w_miss[i] / denom[i] for i in range(n)])
+    p_new = np.array([w_new[j] / (w_new[j] + sum(mu[i][j] for i in range(n)))
+                      for j in range(m)])
+    return p_hit, p_miss, p_new
+
+
+def test_loopy_problems_reach_the_bethe_fixed_point_and_its_error_to_exact():
     """Fully connected problems up to 4 x 4 (every pair may associate, so the graph has
-    loops): over 200 seeded problems the largest error of any marginal stays below 0.15 and
-    the mean largest error below 0.03 (measured: 0.10 and 0.017)."""
+    loops): LBP's marginals equal the fixed point of the message equations computed here
+    independently (to 1e-9), so its error against exact enumeration is the Bethe
+    approximation's own, no larger. The stated bound (largest error of any marginal below
+    0.15, mean below 0.03 over 200 seeded problems) is the reference's, measured here: 0.10
+    and 0.017."""
     rng = np.random.default_rng(1)
-    errors = []
+    errors, reference_errors = [], []
     for _ in range(200):
         problem = random_problem(rng, int(rng.integers(2, 5)), int(rng.integers(2, 5)))
-        lbp = lbp_marginals(*problem, tol=1e-12, max_iter=10_000)
+        lbp = lbp_marginals(*problem, tol=1e-13, max_iter=10_000)
         assert lbp.iterations < 10_000
-        errors.append(max_error(lbp, exact_marginals(*problem)))
-    assert max(errors) < 0.15
-    assert np.mean(errors) < 0.03
+        p_hit, p_miss, p_new = bethe_reference(*problem)
+        np.testing.assert_allclose(lbp.p_hit, p_hit, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(lbp.p_miss, p_miss, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(lbp.p_new, p_new, rtol=0, atol=1e-9)
+        exact = exact_marginals(*problem)
+        errors.append(max_error(lbp, exact))
+        reference_errors.append(max(np.abs(p_hit - exact.p_hit).max(),
+                                    np.abs(p_miss - exact.p_miss).max(),
+                                    np.abs(p_new - exact.p_new).max()))
+    assert max(errors) <= max(reference_errors) + 1e-9
+    assert np.mean(errors) <= np.mean(reference_errors) + 1e-9
+    assert max(reference_errors) < 0.15 and np.mean(reference_errors) < 0.03
+    assert max(reference_errors) > 0.01  # the problems do have loops that matter
 
 
 def test_marginals_are_distributions_and_stop_on_tolerance():

@@ -6,14 +6,9 @@ import numpy as np
 import pytest
 
 from occtrack.cli import main
-from occtrack.lidar import (
-    BeamModel,
-    gaussian_likelihood_ratio,
-    likelihood_ratio,
-    regime,
-    simulate_beams,
-    update_bernoulli,
-)
+from occtrack.filters.beam_bernoulli import update_bernoulli
+from occtrack.models.beam import BeamModel, gaussian_likelihood_ratio, likelihood_ratio, regime
+from occtrack.scenarios.lidar import simulate_beams
 
 MODEL = BeamModel(p_d=0.8, sigma=0.5, clutter_rate=0.5, max_range=40.0)
 

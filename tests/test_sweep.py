@@ -3,6 +3,7 @@ sequential run, and the report of a failed task."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import pytest
@@ -262,20 +263,138 @@ def test_example_specs_parse():
     folder = Path(__file__).resolve().parents[1] / "docs" / "sweeps"
     spec = sweep.load_spec(folder / "highway.toml")
     assert len(sweep.plan(spec)) == 72
+    assert len(sweep.plan(sweep.load_spec(folder / "lidar.toml"))) == 36
     # the MOT17 example names the data beside the checkout, relative to the spec
     if (folder / "../../../shared/data/mot17/MOT17-04-FRCNN").resolve().is_dir():
         spec = sweep.load_spec(folder / "mot17.toml")
         assert len(sweep.plan(spec)) == 12 * len(spec.sequences)
+        if importlib.util.find_spec("optuna") is not None:
+            spec = sweep.load_spec(folder / "search.toml")
+            assert spec.search.trials == 24 and spec.search.metric == "hota"
 
 
 def test_reproduce_table3_on_dask_gives_the_same_table(capsys):
     pytest.importorskip("distributed", reason="the Dask engine needs `occtrack[sweep]`")
     args = ["reproduce", "table3", "--steps", "8", "--seeds", "2", "--json", "--quiet"]
-    assert main(args) == 0
+    assert main(args + ["--jobs", "1"]) == 0  # in this process
     plain = json.loads(capsys.readouterr().out)
-    assert main(args + ["--dask", "--jobs", "1"]) == 0
+    assert main(args) == 0  # the default: a LocalCluster of 2 workers
     on_dask = json.loads(capsys.readouterr().out)
     for sensor, row in plain.items():
         for tracker, cell in row.items():
             assert on_dask[sensor][tracker]["mean"] == cell["mean"]
             assert on_dask[sensor][tracker]["stderr"] == cell["stderr"]
+
+
+SEARCH_SPEC = """\
+trackers = ["measurement-wise", "object-wise-expval"]
+seeds = 2
+[work]
+kind = "highway"
+steps = 10
+sensors = ["measurement-wise"]
+[base]
+particles = 64
+undetected_particles = 32
+birth_particles = 32
+[search]
+kind = "optuna"
+trials = {trials}
+batch = 2
+metric = "gospa"
+direction = "minimize"
+seed = 3
+detection_probability = {{uniform = [0.9, 0.99]}}
+kernel_bandwidth = {{log_uniform = [0.3, 0.7]}}
+"""
+
+
+def test_optuna_search_is_seeded_streams_into_the_table_and_resumes(cluster, tmp_path):
+    """A tiny Optuna study per tracker: the cells of its trials are rows of the table, each
+    trial's value is the mean GOSPA over its seeds, the best trial is the lowest; the same
+    spec gives the same trials and table on a LocalCluster; a rerun with more trials replays
+    the first ones from the table and runs only the new ones."""
+    pytest.importorskip("optuna", reason="[search] needs `pip install occtrack[sweep]`")
+    spec = sweep.load_spec(write(tmp_path / "s.toml", SEARCH_SPEC.format(trials=3)))
+    assert spec.points == () and spec.search.trials == 3
+    one = sweep.sweep(spec, tmp_path / "one.parquet")
+    assert not one.failures
+    assert len(one.cells) == 2 * 3 * 2 and one.ran == len({c.key for c in one.cells})
+    table = one.table
+    assert set(table["tracker"]) == {"measurement-wise", "object-wise-expval"}
+    drawn = table["setting.detection_probability"]
+    assert ((drawn >= 0.9) & (drawn <= 0.99)).all() and (table["setting.particles"] == 64).all()
+    for tracker in ("measurement-wise", "object-wise-expval"):
+        rows = table[table["tracker"] == tracker]
+        means = rows.groupby("settings")["gospa"].mean()
+        best = next(n for n in one.notes if n.startswith(tracker))
+        assert f"best gospa {means.min():.4f}" in best and "of 3, minimize" in best
+
+    two = sweep.sweep(spec, tmp_path / "two.parquet", cluster)
+    assert two.notes == one.notes
+    import pandas as pd
+
+    pd.testing.assert_frame_equal(without_timing(pd.read_parquet(tmp_path / "one.parquet")),
+                                  without_timing(pd.read_parquet(tmp_path / "two.parquet")),
+                                  check_exact=True)
+    more = sweep.load_spec(write(tmp_path / "s.toml", SEARCH_SPEC.format(trials=5)))
+    grown = sweep.sweep(more, tmp_path / "one.parquet")
+    assert grown.skipped >= len(one.cells) and grown.ran <= 2 * 2 * 2
+    assert {c.key for c in one.cells} <= {c.key for c in grown.cells}
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    ("[grid]\nparticles = [64, 128]\n", "[search] replaces [grid] and [random]"),
+    ("", None)])
+def test_search_spec_is_checked_before_any_task(tmp_path, extra, message):
+    pytest.importorskip("optuna", reason="[search] needs `pip install occtrack[sweep]`")
+    text = SEARCH_SPEC.format(trials=2) + extra
+    if message is None:  # a setting out of its range at one end of the search
+        text, message = text.replace("[0.9, 0.99]", "[0.9, 1.5]"), "detection_probability"
+    with pytest.raises(OcctrackError, match=message.replace("[", r"\[")):
+        sweep.load_spec(write(tmp_path / "s.toml", text))
+    for bad, says in (('metric = "gospa"', 'metric = "hota"'),
+                      ('direction = "minimize"', 'direction = "down"'),
+                      ("trials = 2", "trials = 0")):
+        with pytest.raises(OcctrackError, match=says.split(" ")[0]):
+            sweep.load_spec(write(tmp_path / "b.toml",
+                                  SEARCH_SPEC.format(trials=2).replace(bad, says)))
+
+
+LIDAR_SPEC = """\
+seeds = [0, 1]
+[work]
+kind = "lidar"
+ranges = [10.0, 20.0]
+samples = 20000
+[grid]
+p_d = [0.7, 0.9]
+"""
+
+
+def test_lidar_cells_check_the_derived_beam_likelihood(tmp_path):
+    """kind lidar: each cell puts the derived L(z | x) beside seeded simulated beams; the
+    derivation holds (within a few standard errors) for every range, P_D and seed, L is
+    high at the object, about 1 - P_D just past it, and the table is seeded."""
+    spec = sweep.load_spec(write(tmp_path / "l.toml", LIDAR_SPEC))
+    cells = sweep.plan(spec)
+    assert len(cells) == 2 * 1 * 2 * 2 and {c.work for c in cells} == {"x=10m", "x=20m"}
+    one = sweep.sweep(spec, tmp_path / "one.parquet")
+    assert one.ran == 8 and not one.failures
+    table = one.table
+    assert (table["max_z"] < 4.5).all()
+    assert (table["l_hit"] > 1).all()
+    assert table["l_none"].tolist() == pytest.approx(1 - table["setting.p_d"])
+    assert ((table["l_passed"] - table["l_none"]).abs() < 0.01).all()
+    assert ((table["l_hidden"] - 1).abs() < 0.01).all()
+    again = sweep.sweep(spec, tmp_path / "two.parquet")
+    import pandas as pd
+
+    pd.testing.assert_frame_equal(without_timing(pd.read_parquet(tmp_path / "one.parquet")),
+                                  without_timing(again.table), check_exact=True)
+    assert "max |z|" in sweep.summarise(table, one.cells)
+    for bad, says in (("ranges = [10.0, 20.0]", "ranges = [60.0]"),
+                      ("p_d = [0.7, 0.9]", "p_d = [1.5]"),
+                      ("p_d = [0.7, 0.9]", "speed = [1.0]")):
+        with pytest.raises(OcctrackError, match=r"max_range|p_d|unknown lidar setting"):
+            sweep.load_spec(write(tmp_path / "b.toml", LIDAR_SPEC.replace(bad, says)))

@@ -286,6 +286,8 @@ def test_config_from_toml(tmp_path):
     ("confirm_hits = 6\n", "confirm_hits must be between 1 and confirm_window"),
     ("lbp_max_iterations = 100000000\n", "lbp_max_iterations must be between 1 and 100000"),
     ("capacity = 100000000\n", "capacity must be between 0 and 10000000"),
+    ("capacity = 1e8\n", "capacity must be an integer, not 100000000.0"),
+    ("frame_step = 2.5\n", "frame_step must be an integer, not 2.5"),
     ("frame_step = 0\n", "frame_step must be between 1 and 10000"),
     ("velocity_time = 0\n", "velocity_time must be a positive number of seconds"),
     ("edge_noise = \n", "not valid TOML"),

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from occtrack.config import TrackerConfig
+from occtrack.errors import OcctrackError
 from occtrack.tracker import Tracker
 
 POSITIVE = {"image width": dict(image_size=(0.0, 720.0)),
@@ -202,3 +203,139 @@ def test_step_names_what_is_wrong(kwargs, message):
 def test_a_config_that_is_not_a_tracker_config_is_named():
     with pytest.raises(ValueError, match=r"^config must be a TrackerConfig, not dict$"):
         Tracker({"fps": 30})
+
+
+# -- the highway study's tables (occtrack.config.highway): every number against its range ----
+
+def _highway_cases():
+    from occtrack.config.highway import (
+        ROAD_RANGES,
+        SIMULATION_RANGES,
+        TRACKER_RANGES,
+        HighwayTrackerConfig,
+        RoadConfig,
+        SimulationConfig,
+    )
+
+    cases = []
+    for table, kind, ranges in (("simulation.road", RoadConfig, ROAD_RANGES),
+                                ("simulation", SimulationConfig, SIMULATION_RANGES),
+                                ("tracker", HighwayTrackerConfig, TRACKER_RANGES)):
+        for name, interval in ranges.items():
+            low, high = (float(v) for v in interval[1:-1].split(","))
+            integer = isinstance(getattr(kind(), name), int)
+            bad = int(high) + 1 if integer else (low if interval[0] == "(" else low - 0.5)
+            message = (f"{name} must be between {low:g} and {high:g}, not {bad}" if integer
+                       else f"{name} must be a number in {interval}, not {bad}")
+            cases.append((table, kind, name, bad, message))
+    return cases
+
+
+HIGHWAY_CASES = _highway_cases()
+
+
+@pytest.mark.parametrize("table,kind,name,bad,message", HIGHWAY_CASES,
+                         ids=[f"{c[0]}.{c[2]}" for c in HIGHWAY_CASES])
+def test_highway_settings_name_the_key_and_its_range(table, kind, name, bad, message,
+                                                     tmp_path):
+    """Each numeric highway setting out of range is refused, by the dataclass (ValueError) and
+    by the TOML loader (OcctrackError naming the file and the table)."""
+    from occtrack.config.highway import load_highway
+    from occtrack.errors import OcctrackError
+
+    with pytest.raises(ValueError) as err:
+        kind(**{name: bad})
+    assert str(err.value) == message
+    path = tmp_path / "highway.toml"
+    path.write_text(f"[{table}]\n{name} = {bad!r}\n")
+    with pytest.raises(OcctrackError) as err:
+        load_highway(path)
+    assert str(err.value) == f"{path}: [{table}] {message}"
+
+
+HIGHWAY_TOML_CASES = [
+    ("[tracker]\nparticles = 1e8\n", "[tracker] particles must be an integer, not 100000000.0"),
+    ("[tracker]\nlbp_max_iter = 100000000\n",
+     "[tracker] lbp_max_iter must be between 1 and 100000, not 100000000"),
+    ("[tracker]\nparticles = 100000\nmax_tracks = 1000\n",
+     "[tracker] max_tracks x particles must be at most 10000000 (memory), not 1000 x 100000"),
+    ("[tracker]\nprune_threshold = 0.6\n",
+     "[tracker] prune_threshold must be below report_threshold (0.5), not 0.6"),
+    ("[simulation]\nmin_speed = 6.0\n",
+     "[simulation] max_speed must be at least min_speed (6.0), not 5.0"),
+    ("[simulation]\nnoise_std = nan\n", "[simulation] noise_std must be a number in (0, 1000], "
+                                        "not nan"),
+    ("[simulation.road]\nlanes_right = 0\nlanes_left = 0\n",
+     "[simulation.road] the road needs at least one lane: lanes_right + lanes_left must be at "
+     "least 1"),
+    ("[simulation.road]\nlanes = 3\n", "unknown setting 'simulation.road.lanes'"),
+    ("[tracker]\nroad = {}\n", "the tracker uses the simulation's road"),
+    ("[tracker]\nsurvival = 'high'\n", "[tracker] survival must be a number, not 'high'"),
+    ("[lidar]\nx = 1\n", "unknown table [lidar]"),
+    ("tracker = 3\n", "[tracker] must be a table of settings, not 3"),
+]
+
+
+@pytest.mark.parametrize("text,message", HIGHWAY_TOML_CASES,
+                         ids=[f"{i}" for i in range(len(HIGHWAY_TOML_CASES))])
+def test_highway_toml_names_the_table_and_setting(text, message, tmp_path):
+    from occtrack.config.highway import load_highway
+    from occtrack.errors import OcctrackError
+
+    path = tmp_path / "highway.toml"
+    path.write_text(text)
+    with pytest.raises(OcctrackError) as err:
+        load_highway(path)
+    assert str(err.value).startswith(f"{path}: {message}"), str(err.value)
+
+
+def test_highway_defaults_and_the_paper_settings_pass():
+    from occtrack.config.highway import HighwayTrackerConfig, SimulationConfig
+
+    sim = SimulationConfig()
+    tracker = HighwayTrackerConfig.matching(sim)
+    assert tracker.noise_std == sim.noise_std and tracker.road == sim.road
+    HighwayTrackerConfig(particles=4096, max_tracks=64, noise_std=0.85, birth_rate=0.15)
+
+
+TOML_CASES = [
+    ("gating = 1\n", "gating must be true or false, not 1"),
+    ('occlusion = 3\n', "occlusion must be a string, not 3"),
+    ("capacity = true\n", "capacity must be an integer, not True"),
+    ('edge_noise = "0.1"\n', "edge_noise must be a number, not '0.1'"),
+    ("edge_noise = false\n", "edge_noise must be a number, not False"),
+    ("birth_half_size = [1.0, true]\n",
+     "birth_half_size must be a pair of numbers like [1.0, 2.0], not [1.0, True]"),
+    ("prune_masss = 0.1\n", "unknown setting 'prune_masss'; known settings: "),
+]
+
+
+@pytest.mark.parametrize("text,message", TOML_CASES, ids=[m.split(" ")[0] + f"-{i}" for i, (_, m)
+                                                         in enumerate(TOML_CASES)])
+def test_toml_values_of_the_wrong_type_name_the_setting_and_file(tmp_path, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(OcctrackError) as err:
+        TrackerConfig.from_toml(path)
+    assert str(err.value).startswith(f"{path}: {message}"), str(err.value)
+
+
+def test_a_toml_path_that_is_no_file_is_named(tmp_path):
+    with pytest.raises(OcctrackError) as err:
+        TrackerConfig.from_toml(tmp_path / "none.toml")
+    assert str(err.value) == f"{tmp_path / 'none.toml'}: no such file"
+    with pytest.raises(OcctrackError) as err:
+        TrackerConfig.from_toml(tmp_path)
+    assert str(err.value) == f"{tmp_path}: is a directory, expected a TOML file"
+
+
+def test_run_names_what_it_takes():
+    with pytest.raises(ValueError) as err:
+        Tracker().run(42)
+    assert str(err.value) == ("Tracker.run takes a MotTable or one (M, 4) or (M, 5) array per "
+                              "frame, not int")
+    with pytest.raises(ValueError) as err:
+        Tracker().run([np.zeros((1, 4)), np.zeros((2, 3))], quiet=True)
+    assert str(err.value) == "frame 2: detections must be (M, 4) or (M, 5), not (2, 3)"
+    empty = Tracker().run([[], np.zeros((0, 5))], quiet=True)  # an empty frame is no error
+    assert empty.frames == 2 and len(empty.id) == 0

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from occtrack.jit import njit
+
 
 @dataclass(frozen=True)
 class Marginals:
@@ -122,36 +124,11 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
         sizes = np.bincount(cluster, minlength=count)
     else:
         count, order, sizes = 1, np.arange(E), np.array([E])
-    nu = np.ones(E)
-    # the pairs still iterating, grouped by cluster: positions in `order`
-    live = order
-    a_rows, a_cols, a_ratio, a_new = rows[live], cols[live], ratio[live], w_new[cols[live]]
-    a_nu = np.ones(len(live))
-    a_sizes = sizes[sizes > 0]
-    iterations = 0
-    while len(live) and iterations < max_iter:
-        iterations += 1
-        s = a_ratio * a_nu
-        total = np.bincount(a_rows, weights=s, minlength=n)
-        mu = a_ratio / (1.0 + total[a_rows] - s)
-        into = np.bincount(a_cols, weights=mu, minlength=m)
-        nu_new = 1.0 / (a_new + into[a_cols] - mu)
-        change = np.abs(nu_new - a_nu) / nu_new
-        a_nu = nu_new
-        if len(a_sizes) == 1:
-            if change.max() < tol:
-                break
-            continue
-        starts = np.cumsum(a_sizes) - a_sizes
-        done = np.maximum.reduceat(change, starts) < tol
-        if done.any():
-            finished = np.repeat(done, a_sizes)
-            nu[live[finished]] = a_nu[finished]
-            keep = ~finished
-            live, a_rows, a_cols, a_ratio, a_new, a_nu = (
-                live[keep], a_rows[keep], a_cols[keep], a_ratio[keep], a_new[keep], a_nu[keep])
-            a_sizes = a_sizes[~done]
-    nu[live] = a_nu
+    grouped, iterations = _iterate_clusters(rows[order], cols[order], ratio[order],
+                                            w_new[cols[order]], sizes[sizes > 0], n, m, tol,
+                                            max_iter)
+    nu = np.empty(E)
+    nu[order] = grouped
     s = ratio * nu
     total = np.bincount(rows, weights=s, minlength=n)
     p_hit = s / (1.0 + total[rows])
@@ -159,3 +136,46 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
     mu = ratio / (1.0 + total[rows] - s)
     p_new = w_new / (w_new + np.bincount(cols, weights=mu, minlength=m))
     return SparseMarginals(p_hit, p_miss, p_new, iterations, count)
+
+
+@njit
+def _iterate_clusters(rows, cols, ratio, new, sizes, n, m, tol, max_iter):
+    """The message iteration of `lbp_sparse` on pairs grouped by cluster (`sizes` pairs
+    each, in order): (nu of each pair, iterations). A cluster whose largest relative change
+    of nu falls below `tol` is frozen; the iteration ends when all are, or at `max_iter`."""
+    E, C = len(rows), len(sizes)
+    start = np.zeros(C + 1, dtype=np.int64)
+    for c in range(C):
+        start[c + 1] = start[c] + sizes[c]
+    nu, s, mu = np.ones(E), np.empty(E), np.empty(E)
+    total, into = np.zeros(n), np.zeros(m)
+    live = np.ones(C, dtype=np.bool_)
+    remaining, iterations = C, 0
+    while remaining and iterations < max_iter:
+        iterations += 1
+        for c in range(C):
+            if live[c]:
+                for e in range(start[c], start[c + 1]):
+                    total[rows[e]] = 0.0
+                    into[cols[e]] = 0.0
+        for c in range(C):
+            if live[c]:
+                for e in range(start[c], start[c + 1]):
+                    s[e] = ratio[e] * nu[e]
+                    total[rows[e]] += s[e]
+        for c in range(C):
+            if live[c]:
+                for e in range(start[c], start[c + 1]):
+                    mu[e] = ratio[e] / (1.0 + total[rows[e]] - s[e])
+                    into[cols[e]] += mu[e]
+        for c in range(C):
+            if live[c]:
+                change = 0.0
+                for e in range(start[c], start[c + 1]):
+                    nu_new = 1.0 / (new[e] + into[cols[e]] - mu[e])
+                    change = max(change, abs(nu_new - nu[e]) / nu_new)
+                    nu[e] = nu_new
+                if change < tol:
+                    live[c] = False
+                    remaining -= 1
+    return nu, iterations

@@ -1,42 +1,25 @@
-"""argparse types shared by the subcommands, so every command words its errors the same way."""
-
-from __future__ import annotations
+"""The argparse types live in the schema on the bottom floor, `occtrack.config.arguments`;
+the option groups that several subcommands share live here."""
 
 import argparse
-from collections.abc import Callable
+
+from occtrack.config.arguments import (
+    DAY_AT_30_FPS,
+    positive_float,
+    positive_int,
+    seed_int,
+    whole_number,
+)
+
+__all__ = ["DAY_AT_30_FPS", "add_engine_options", "positive_float", "positive_int", "seed_int",
+           "whole_number"]
 
 
-def whole_number(minimum: int) -> Callable[[str], int]:
-    """An argparse type: an integer no smaller than `minimum`."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"{text} must be at least {minimum}")
-        return value
-
-    parse.__name__ = "whole number"
-    return parse
-
-
-def positive_float(text: str) -> float:
-    """An argparse type: a finite number above zero."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"{text} must be a finite number above 0")
-    return value
-
-
-positive_float.__name__ = "positive number"
-
-DAY_AT_30_FPS = 24 * 3600 * 30
-"""Default bound on a run of empty frames: a day of video at the usual MOTChallenge rate."""
-
-positive_int = whole_number(1)
-seed_int = whole_number(0)
+def add_engine_options(parser: argparse.ArgumentParser, sequential_help: str) -> None:
+    """--workers / --scheduler / --sequential: where the tasks of a Dask-run command go."""
+    engine = parser.add_mutually_exclusive_group()
+    engine.add_argument("--workers", type=positive_int, metavar="N",
+                        help="worker processes of the LocalCluster (default: one per core)")
+    engine.add_argument("--scheduler", metavar="ADDRESS",
+                        help="a running Dask scheduler, e.g. tcp://127.0.0.1:8786")
+    engine.add_argument("--sequential", action="store_true", help=sequential_help)

@@ -19,6 +19,13 @@ and the frames per second of the tracker call (scoring not counted). With more t
 sequence, two tables follow: TrackEval's COMBINED_SEQ scores (counts summed, HOTA and its parts
 from the summed counts, as MOTChallenge reports a benchmark) and the plain mean over sequences.
 
+Engine: each (sequence, tracker) run is one task of occtrack sweep's engine, a Dask
+LocalCluster with one single-threaded worker process per core (--workers N), started and
+stopped by the command; --scheduler tcp://HOST:PORT sends the tasks to a running Dask cluster
+(its workers must import occtrack and see DIR); --sequential runs them in this process. The
+report is the same on every engine (run times aside). Without Dask (the `sweep` extra) the
+runs go in this process, with a note.
+
 A sequence folder holds det/det.txt (detections, rows in any frame order), gt/gt.txt and
 seqinfo.ini (image size, frame rate, length), as MOT17's do. The peers need the `peers` extra
 (pip install "occtrack[peers]"); without it they are left out with a note.
@@ -52,7 +59,8 @@ examples:
   occtrack benchmark $OCCTRACK_DATA
   occtrack benchmark MOT17-04-FRCNN --trackers measurement-wise,bytetrack,botsort
   occtrack benchmark $OCCTRACK_DATA --json benchmark.json --quiet
-  occtrack benchmark $OCCTRACK_DATA --json run.json --keep-boxes  # for occtrack report run.json"""
+  occtrack benchmark $OCCTRACK_DATA --json run.json --keep-boxes  # for occtrack report run.json
+  occtrack benchmark $OCCTRACK_DATA --scheduler tcp://127.0.0.1:8786"""
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -71,19 +79,24 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--keep-boxes", action="store_true",
                         help="with --json: also every box of the ground truth and the trackers "
                              "(and the per-frame counts), for occtrack report's frame viewer")
+    from occtrack.cli.arguments import add_engine_options
+
+    add_engine_options(parser, "run the trackers one by one in this process, without Dask")
     parser.add_argument("--force", action="store_true", help="overwrite an existing JSON file")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, note or summary")
 
 
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from occtrack.errors import OcctrackError
-    from occtrack.experiments import benchmark
+    from occtrack.experiments import benchmark, sweep
+    from occtrack.io.atomic import atomic_write, check_output
     from occtrack.progress import summary
 
-    if args.json not in (None, "-") and Path(args.json).exists() and not args.force:
-        raise OcctrackError("exists already; pass --force to overwrite it", args.json)
+    if args.json is not None:
+        inputs = [args.root]
+        for folder in benchmark.find_sequences(args.root):
+            inputs += [folder / "seqinfo.ini", folder / "det" / "det.txt", folder / "gt" / "gt.txt"]
+        check_output(args.json, args.force, inputs)
     if (args.per_frame or args.keep_boxes) and args.json is None:
         option = "--keep-boxes" if args.keep_boxes else "--per-frame"
         raise OcctrackError(f"{option} keeps data for the JSON file only; add --json FILE")
@@ -94,9 +107,18 @@ def run(args: argparse.Namespace) -> int:
     else:
         trackers = benchmark.parse_trackers(args.trackers)
 
+    engine = None
+    if not args.sequential:
+        if args.scheduler or sweep.dask_available():
+            engine = sweep.DaskEngine(args.scheduler, args.workers)
+        elif not args.quiet:
+            print("occtrack benchmark: note: Dask is not installed (pip install "
+                  "\"occtrack[sweep]\"): the runs go one by one in this process",
+                  file=sys.stderr)
     start = time.perf_counter()
     report = benchmark.benchmark(args.root, trackers, quiet=args.quiet,
-                                 per_frame=args.per_frame, keep_boxes=args.keep_boxes)
+                                 per_frame=args.per_frame, keep_boxes=args.keep_boxes,
+                                 engine=engine)
     seconds = time.perf_counter() - start
 
     text = benchmark.to_json(report)
@@ -104,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(text)
     else:
         if args.json is not None:
-            benchmark.write_atomic(args.json, text)
+            with atomic_write(args.json, args.force) as fh:
+                fh.write(text)
         print(benchmark.format_report(report))
     if not args.quiet:
         frames = sum(entry["frames"] for entry in report["sequences"].values()) * len(trackers)

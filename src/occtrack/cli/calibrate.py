@@ -24,9 +24,10 @@ and over one-second blocks of frames). Several GT DET pairs are pooled.
 -o writes a TOML file of TrackerConfig fields only (detectability, detectability_ratio,
 clutter_rate, clutter_score_power, edge_noise) that `occtrack track --config` and a sweep's
 [work] config load; each setting's interval and every measurement are TOML comments. With
---occlusion none the detectability is that of every pedestrian (no occlusion model explains
-the misses behind others), else that of visible ones (visibility >= 0.75). The report is
-printed too (--quiet: not).
+--occlusion none the detectability is that of tracked pedestrians, P(detected | detected
+within the last 0.67 s, the tracker's report_coast_time): no occlusion model explains the
+misses behind others, and the people the tracker does not hold are misses it never weighs;
+else that of visible ones (visibility >= 0.75). The report is printed too (--quiet: not).
 
 The image size and frame rate come from seqinfo.ini when GT sits at SEQ/gt/gt.txt, else from
 --image-size and --fps. Ground truth with class and visibility columns (MOT17's 9 columns)

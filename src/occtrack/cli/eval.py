@@ -22,7 +22,9 @@ Files are read as TrackEval reads them (comma or space separated, CRLF line ends
 ids written 3 or 3.0, extra columns ignored); a malformed row, such as a frame of 2.5, stops
 with its file and line.
 The sequence length is the ground truth's seqinfo.ini (SEQ/gt/gt.txt layout), --frames, or the
-last frame in either file; result ids must be unique within a frame.
+last frame in either file; result ids must be unique within a frame. A ground truth without one
+box the protocol scores (no rows, or none a pedestrian marked to be scored) is an error, exit
+1: every metric is then undefined, and a 0 would read as a tracker that failed.
 
 Protocols:
 
@@ -176,7 +178,7 @@ def _sequence_name(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     from occtrack.io.mot import read_mot
     from occtrack.metrics import protocols
-    from occtrack.metrics.evaluate import evaluate_frames
+    from occtrack.metrics.evaluate import check_truth, evaluate_frames
 
     start = time.perf_counter()
     out_files = _out_files(args)
@@ -189,6 +191,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"occtrack eval: note: {left_out} of {len(result)} result rows name a class other "
               f"than pedestrian (column 8) and are not scored", file=sys.stderr)
     frames = protocols.scored_frames(gt, result, args.protocol, num_frames)
+    check_truth(frames, gt)
     trackeval_results = None
     if out_files is not None:
         from occtrack.metrics.trackeval_mot17 import SUMMARY_FILE, output_files, sequence_results

@@ -47,7 +47,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from occtrack.lidar import BeamModel, empirical_ratio, likelihood_ratio, regime
+    from occtrack.models.beam import BeamModel, likelihood_ratio, regime
+    from occtrack.scenarios.lidar import empirical_ratio
 
     try:
         model = BeamModel(args.p_d, args.sigma, args.clutter_rate, args.max_range)

@@ -54,8 +54,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def configure_highway(p: argparse.ArgumentParser) -> None:
-    from occtrack.highway.config import SENSOR_MODES
-    from occtrack.highway.occlusion import TRACKER_NAMES
+    from occtrack.config.highway import SENSOR_MODES
+    from occtrack.occlusion.highway import TRACKER_NAMES
 
     p.add_argument("--sensor", choices=SENSOR_MODES, default="measurement-wise",
                    help="how the simulation hides things (default measurement-wise)")
@@ -66,7 +66,7 @@ def configure_highway(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=seed_int, default=1, help="random seed (default 1)")
     p.add_argument("--config", type=Path, metavar="TOML",
                    help="settings: [simulation], [simulation.road] and [tracker] tables with "
-                        "the fields of occtrack.highway.config")
+                        "the fields of occtrack.config.highway")
     p.add_argument("--figure", type=Path, metavar="PNG", help="draw the last step")
     p.add_argument("--animation", type=Path, metavar="GIF",
                    help="animate the last --animation-steps steps")
@@ -78,15 +78,15 @@ def configure_highway(p: argparse.ArgumentParser) -> None:
 
 
 def run_highway(args: argparse.Namespace) -> int:
-    from occtrack.highway.config import SimulationConfig, TrackerConfig, load_config
-    from occtrack.highway.score import evaluate
-    from occtrack.highway.sensor import MeasurementModel
+    from occtrack.config.highway import HighwayTrackerConfig, SimulationConfig, load_highway
+    from occtrack.experiments.highway import evaluate
+    from occtrack.models.highway_sensor import MeasurementModel
 
     if args.config is not None:
-        simulation, tracking = load_config(args.config)
+        simulation, tracking = load_highway(args.config)
     else:
         simulation = SimulationConfig()
-        tracking = TrackerConfig.matching(simulation)
+        tracking = HighwayTrackerConfig.matching(simulation)
     from occtrack.viz.highway import check_path
 
     if args.figure is not None:

@@ -7,7 +7,6 @@ import sys
 import time
 from pathlib import Path
 
-from occtrack._compat import tomllib
 from occtrack.cli.arguments import seed_int
 from occtrack.errors import OcctrackError
 
@@ -61,16 +60,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def load_config(path: Path):
-    """The DetectorConfig in a TOML file."""
+    """The DetectorConfig in a TOML file ([detector] table, or its keys at top level), read
+    by the schema's one loader."""
+    from occtrack.config import load_toml
     from occtrack.scenarios.detector import DetectorConfig
 
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise OcctrackError("no such file", str(path)) from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise OcctrackError(f"not valid TOML: {err}", str(path)) from None
+    data = load_toml(path)
     table = data.get("detector", data)
     if not isinstance(table, dict):
         raise OcctrackError("[detector] must be a table", str(path))

@@ -8,6 +8,11 @@ scores are TrackEval's own COMBINED_SEQ, the way MOTChallenge reports a benchmar
 mean over sequences is given beside them, because one identity event in one sequence can move
 a combined number.
 
+Each (sequence, tracker) run is one task of `occtrack sweep`'s engine: a Dask LocalCluster
+started and stopped here, a running Dask scheduler, or this process (`engine=None`); every
+task is deterministic and the report is assembled in the order of the sequences and trackers,
+so it does not depend on the engine (the run times aside).
+
 On request the report also keeps what a page of the run needs (`occtrack report`): per frame,
 each tracker's GOSPA and its counts of missed and false objects, and the counts of true and
 reported objects (`per_frame=True`), and the boxes themselves (`keep_boxes=True`), all on the
@@ -16,9 +21,9 @@ boxes the protocol scores.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -126,6 +131,21 @@ def load_sequence(folder: Path) -> Sequence:
                     int(info["fps"]), n, det, gt)
 
 
+_SEQUENCES: dict = {}
+
+
+def cached_sequence(folder: str | os.PathLike) -> Sequence:
+    """The sequence folder, read once per process (a worker keeps it for later tasks) and
+    read again when one of its files changed."""
+    path = Path(folder)
+    stamp = tuple((path / part).stat().st_mtime_ns
+                  for part in ("seqinfo.ini", "det/det.txt", "gt/gt.txt"))
+    cached = _SEQUENCES.get(str(path))
+    if cached is None or cached[0] != stamp:
+        _SEQUENCES[str(path)] = (stamp, load_sequence(path))
+    return _SEQUENCES[str(path)][1]
+
+
 def track(name: str, seq: Sequence) -> MotTable:
     """Run one tracker, occtrack (by occlusion model) or a peer, on a whole sequence."""
     return track_with_states(name, seq)[0]
@@ -190,11 +210,60 @@ def result_boxes(frames: ScoredFrames, result: MotTable, states: np.ndarray | No
     return boxes
 
 
+@dataclass(frozen=True)
+class Job:
+    """One task of a benchmark: a tracker on a sequence folder, and what to keep."""
+
+    folder: str
+    tracker: str
+    per_frame: bool = False
+    keep_boxes: bool = False
+
+
+def run_job(job: Job) -> dict:
+    """Track and score one sequence with one tracker (a task: it reads the folder itself, so
+    only the job's text travels to a worker); the parts of the report it makes."""
+    seq = cached_sequence(job.folder)
+    if job.tracker in peers.PEERS:
+        peers.load()
+    start = time.perf_counter()
+    result, states = track_with_states(job.tracker, seq)
+    spent = time.perf_counter() - start
+    scored = scored_frames(seq.gt, result, PROTOCOL, seq.length)
+    results = sequence_results(scored.trackeval)
+    out = {"results": results,
+           "scores": {**summary(results), "tracks": int(len(np.unique(result.id))),
+                      "seconds": spent, "frames_per_second": seq.length / max(spent, 1e-9)}}
+    if job.per_frame or job.keep_boxes:
+        out["truth"] = [int(len(rows)) for rows in scored.truth_rows]
+        out["per_frame"] = per_frame_counts(scored)
+    if job.keep_boxes:
+        out["truth_boxes"] = truth_boxes(scored, seq.gt)
+        out["boxes"] = result_boxes(scored, result, states)
+    return out
+
+
+def _run_jobs(jobs: list[Job], engine):
+    """(job, result, error) as each job finishes: on `engine` (occtrack.experiments.sweep's
+    DaskEngine, started by the caller) or, with None, here one after another."""
+    if engine is not None:
+        yield from engine.map(run_job, jobs)
+        return
+    for job in jobs:
+        try:
+            yield job, run_job(job), None
+        except Exception as err:  # noqa: BLE001 - reported with its job, as on Dask
+            yield job, None, err
+
+
 def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
-              per_frame: bool = False, keep_boxes: bool = False) -> dict:
+              per_frame: bool = False, keep_boxes: bool = False, engine=None) -> dict:
     """Track and score every sequence under `root` with every tracker named; the report that
     `--json` writes (see `occtrack benchmark --help` for its shape). `per_frame` adds each
-    sequence's "per_frame" counts, `keep_boxes` its "boxes" (and the counts)."""
+    sequence's "per_frame" counts, `keep_boxes` its "boxes" (and the counts). `engine`: a
+    `occtrack.experiments.sweep.DaskEngine` to run the (sequence, tracker) tasks on (started
+    here after the inputs are checked, unless the caller started it), or None for this
+    process."""
     per_frame = per_frame or keep_boxes
     folders = find_sequences(root)
     sequences = [load_sequence(folder) for folder in folders]
@@ -203,33 +272,45 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
         raise OcctrackError("two sequence folders share a name in seqinfo.ini", str(root))
     if any(name in peers.PEERS for name in trackers):
         peers.load()
-    jobs = [(seq, name) for seq in sequences for name in trackers]
+    jobs = [Job(str(seq.folder.resolve()), name, per_frame, keep_boxes) for seq in sequences
+            for name in trackers]
+    done: dict[Job, dict] = {}
+    failed: list[str] = []
+    with contextlib.ExitStack() as stack:
+        if engine is not None:
+            if not engine.started:  # else the caller started it and stops it
+                stack.enter_context(engine)
+            engine.warm("benchmark")
+        for job, out, err in progress(_run_jobs(jobs, engine), len(jobs), "benchmark",
+                                      quiet):
+            if err is not None:
+                what = (err.message if isinstance(err, OcctrackError)
+                        else f"{type(err).__name__}: {err}")
+                failed.append(f"{job.tracker} on {job.folder}: {what}")
+            else:
+                done[job] = out
+    if failed:
+        raise OcctrackError(f"{len(failed)} of {len(jobs)} runs failed (the others finished): "
+                            + "; ".join(failed))
     raw: dict[str, list[dict]] = {name: [] for name in trackers}
     seconds: dict[str, float] = dict.fromkeys(trackers, 0.0)
     report: dict = {"protocol": PROTOCOL, "trackers": list(trackers), "sequences": {}}
-    for seq, name in progress(jobs, len(jobs), "benchmark", quiet):
-        start = time.perf_counter()
-        result, states = track_with_states(name, seq)
-        spent = time.perf_counter() - start
-        scored = scored_frames(seq.gt, result, PROTOCOL, seq.length)
-        results = sequence_results(scored.trackeval)
-        raw[name].append(results)
-        seconds[name] += spent
+    for job, seq in zip(jobs, (seq for seq in sequences for _ in trackers), strict=True):
+        name, out = job.tracker, done[job]
+        raw[name].append(out["results"])
+        seconds[name] += out["scores"]["seconds"]
         entry = report["sequences"].setdefault(seq.name, {
             "folder": str(seq.folder), "frames": seq.length, "fps": seq.fps,
             "image_size": [seq.width, seq.height], "trackers": {}})
-        entry["trackers"][name] = {**summary(results), "tracks": int(len(np.unique(result.id))),
-                                   "seconds": spent,
-                                   "frames_per_second": seq.length / max(spent, 1e-9)}
+        entry["trackers"][name] = out["scores"]
         if per_frame:
             if "per_frame" not in entry:
-                entry["per_frame"] = {"truth": [int(len(rows)) for rows in scored.truth_rows],
-                                      "trackers": {}}
-            entry["per_frame"]["trackers"][name] = per_frame_counts(scored)
+                entry["per_frame"] = {"truth": out["truth"], "trackers": {}}
+            entry["per_frame"]["trackers"][name] = out["per_frame"]
         if keep_boxes:
             if "boxes" not in entry:
-                entry["boxes"] = {"truth": truth_boxes(scored, seq.gt), "trackers": {}}
-            entry["boxes"]["trackers"][name] = result_boxes(scored, result, states)
+                entry["boxes"] = {"truth": out["truth_boxes"], "trackers": {}}
+            entry["boxes"]["trackers"][name] = out["boxes"]
     frames = sum(seq.length for seq in sequences)
     report["combined"] = {"method": COMBINED_METHOD, "trackers": {}}
     report["mean"] = {"method": MEAN_METHOD, "trackers": {}}
@@ -292,20 +373,3 @@ def to_json(report: dict) -> str:
             return "[\n" + items + "\n" + "  " * depth + "]"
         return json.dumps(value, separators=(",", ":"))
     return lay(report, 0) + "\n"
-
-
-def write_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write `text` to `path` through a temporary file in the same folder, so that a reader
-    never sees half a file and an interrupted run leaves the old one."""
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise OcctrackError("folder does not exist", str(folder))
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

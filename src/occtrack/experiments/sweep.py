@@ -14,6 +14,10 @@ A spec (TOML) names the trackers, the seeds, the work and the settings:
     # steps = 1000
     # sensors = ["object-wise", "measurement-wise"]
 
+    # kind = "lidar"                      # ... or the beam likelihood of paper section V
+    # ranges = [10.0, 20.0]               # the object's range on the beam, m
+    # samples = 100000                    # simulated beams per case
+
     [base]                                # settings every cell gets
     max_labels = 96
 
@@ -27,9 +31,22 @@ A spec (TOML) names the trackers, the seeds, the work and the settings:
     velocity_time = {log_uniform = [0.5, 20.0]}
     confirm_hits = {choice = [2, 3]}
 
-Settings are fields of `occtrack.config.TrackerConfig` (kind "mot") or of the highway's
-`TrackerConfig` (kind "highway"; `simulation.NAME` and `simulation.road.NAME` set the
-simulation, which the tracker then matches as in `occtrack simulate highway`). A cell is one
+    # [search]                            # or, instead of [grid] and [random]: Optuna
+    # kind = "optuna"                     # (TPE sampler, seeded), one study per tracker
+    # trials = 32
+    # metric = "hota"                     # a metric column; its mean over the trial's cells
+    # direction = "maximize"
+    # seed = 0
+    # batch = 4                           # trials asked at once (run as parallel tasks)
+    # edge_noise = {log_uniform = [0.01, 0.1]}
+
+Settings are fields of `occtrack.config.TrackerConfig` (kind "mot") or of
+`occtrack.config.HighwayTrackerConfig` (kind "highway"; `simulation.NAME` and
+`simulation.road.NAME` set the simulation, which the tracker then matches as in
+`occtrack simulate highway`) or of the lidar's
+`BeamModel` (kind "lidar": p_d, sigma, clutter_rate, max_range; its one "tracker" is
+"separable", and a cell checks the derived L(z | x) against seeded simulated beams, as
+`occtrack lidar` does, at five ranges about the object). A cell is one
 (work item, tracker, settings point, seed): a sequence or a simulated sensor, tracked and
 scored. Its key is a hash of everything that decides its result (the settings, the seed, the
 text of the spec's settings file; a sequence by its name, not by its files' content: after a
@@ -48,6 +65,12 @@ rerun retries them).
 Tasks are deterministic functions of their cell: the table does not depend on the engine (this
 process, a LocalCluster or a remote Dask scheduler) or on the order tasks finish in; rows are
 written in the order of the plan.
+
+A [search] asks Optuna's seeded TPE sampler for `batch` trials at a time (one study per
+tracker), runs every cell of those trials (work items x seeds) as tasks on the same engine,
+and tells each trial the mean of `metric` over its cells, in trial order; so the trials, like
+the table, do not depend on the engine. A rerun replays the study: the cells already in the
+table are read back instead of run, so a larger `trials` goes on where the last run stopped.
 """
 
 from __future__ import annotations
@@ -68,7 +91,7 @@ from pathlib import Path
 from occtrack._compat import tomllib
 from occtrack.errors import OcctrackError
 
-KINDS = ("mot", "highway")
+KINDS = ("mot", "highway", "lidar")
 DETECTIONS = ("det", "simulated")
 SETTING_PREFIX = "setting."
 IDENTITY = ("cell", "kind", "work", "tracker", "seed", "settings")
@@ -78,9 +101,19 @@ MOT_METRICS = ("hota", "idf1", "mota", "motp", "deta", "assa", "loca", "mostly_t
                "mostly_lost", "fp", "fn", "id_switches", "tracks", "frames")
 HIGHWAY_METRICS = ("gospa", "gospa_per_car", "localisation", "missed", "false", "steps",
                    "car_steps", "n_missed", "n_false", "tracks")
+LIDAR_METRICS = ("max_z", "l_hidden", "l_before", "l_hit", "l_after", "l_passed", "l_none",
+                 "samples")
+"""kind lidar: the beam likelihood ratio L(z | x) derived (paper section V) at five returns z:
+x / 2 (the object hidden behind the return: L about 1), x - 3 sigma, x (the hit), x + 2 sigma,
+x + 6 sigma (the beam passed where the object would be: L about 1 - P_D), and with no return
+(`l_none`); `max_z`, the largest Poisson standard score of the simulated beams against it."""
+LIDAR_TRACKERS = ("separable",)
 HEADLINE = {"mot": (("hota", "HOTA"), ("idf1", "IDF1"), ("mota", "MOTA")),
-            "highway": (("gospa", "GOSPA/step"), ("gospa_per_car", "GOSPA/car"))}
+            "highway": (("gospa", "GOSPA/step"), ("gospa_per_car", "GOSPA/car")),
+            "lidar": (("max_z", "max |z|"), ("l_hit", "L hit"), ("l_passed", "L passed"))}
 DISTRIBUTIONS = ("uniform", "log_uniform", "int_uniform", "choice")
+SEARCH_KINDS = ("optuna",)
+DIRECTIONS = ("maximize", "minimize")
 FLUSH_SECONDS = 5.0
 
 
@@ -103,6 +136,22 @@ class Spec:
     steps: int = 0
     sensors: tuple[str, ...] = ()
     config: Path | None = None
+    search: Search | None = None
+    ranges: tuple[float, ...] = ()  # lidar: the object's range on the beam, m
+
+
+@dataclass(frozen=True)
+class Search:
+    """A [search] table: Optuna over the settings in `laws` (as [random] writes them)."""
+
+    kind: str
+    trials: int
+    metric: str
+    direction: str
+    seed: int
+    batch: int
+    laws: dict
+    base: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -150,17 +199,19 @@ def load_spec(path: str | os.PathLike) -> Spec:
         raise OcctrackError("is a directory, expected a sweep spec (TOML)", source) from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise OcctrackError(f"not valid TOML: {err}", source) from None
-    unknown = sorted(set(data) - {"work", "trackers", "seeds", "base", "grid", "random"})
+    unknown = sorted(set(data) - {"work", "trackers", "seeds", "base", "grid", "random",
+                                  "search"})
     if unknown:
         raise OcctrackError(f"unknown key {unknown[0]!r}; a spec holds [work], trackers, "
-                            f"seeds, [base], [grid] and [random]", source)
+                            f"seeds, [base], [grid], [random] and [search]", source)
     work = _table(data, "work", source)
     kind = work.get("kind")
     if kind not in KINDS:
         raise OcctrackError(f"[work] kind must be one of {', '.join(KINDS)}, not {kind!r}",
                             source)
     allowed = {"mot": {"kind", "sequences", "detections", "config"},
-               "highway": {"kind", "steps", "sensors", "config"}}[kind]
+               "highway": {"kind", "steps", "sensors", "config"},
+               "lidar": {"kind", "ranges", "samples"}}[kind]
     extra = sorted(set(work) - allowed)
     misplaced = [k for k in extra if k in ("trackers", "seeds")]
     if misplaced:
@@ -178,9 +229,9 @@ def load_spec(path: str | os.PathLike) -> Spec:
         if not config.is_file():
             raise OcctrackError(f"[work] config {work['config']!r}: no such file", source)
         if kind == "highway":
-            from occtrack.highway.config import load_config
+            from occtrack.config.highway import load_highway
 
-            load_config(config)
+            load_highway(config)
         else:
             from occtrack.config import TrackerConfig
 
@@ -196,6 +247,12 @@ def load_spec(path: str | os.PathLike) -> Spec:
                    for combo in itertools.product(*(grid[n] for n in names))]
     random_points = _random_points(_table(data, "random", source), source)
     points = [{**base, **g, **r} for g in grid_points for r in random_points]
+    search = None
+    if "search" in data:
+        if grid or data.get("random"):
+            raise OcctrackError("[search] replaces [grid] and [random]: give one or the other "
+                                "([base] holds the settings every trial shares)", source)
+        search = _search(_table(data, "search", source), kind, base, source)
 
     spec_kwargs: dict = {}
     if kind == "mot":
@@ -220,9 +277,25 @@ def load_spec(path: str | os.PathLike) -> Spec:
                                 f"not {detections!r}", source)
         default_seeds = [0]
         spec_kwargs.update(sequences=tuple(dict.fromkeys(found)), detections=detections)
+    elif kind == "lidar":
+        trackers = _names(data.get("trackers", list(LIDAR_TRACKERS)), LIDAR_TRACKERS,
+                          "trackers", source)
+        ranges = work.get("ranges", [20.0])
+        if not isinstance(ranges, list) or not ranges or not all(
+                isinstance(r, int | float) and not isinstance(r, bool) and r > 0
+                for r in ranges):
+            raise OcctrackError("[work] ranges must be a non-empty list of object ranges "
+                                "> 0 (m)", source)
+        samples = work.get("samples", 100_000)
+        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1000:
+            raise OcctrackError(f"[work] samples must be a whole number >= 1000, not "
+                                f"{samples!r}", source)
+        default_seeds = [0]
+        spec_kwargs.update(ranges=tuple(dict.fromkeys(float(r) for r in ranges)),
+                           steps=samples)
     else:
-        from occtrack.highway.config import SENSOR_MODES
-        from occtrack.highway.occlusion import TRACKER_NAMES
+        from occtrack.config.highway import SENSOR_MODES
+        from occtrack.occlusion.highway import TRACKER_NAMES
 
         trackers = _names(data.get("trackers", list(TRACKER_NAMES)), TRACKER_NAMES, "trackers",
                           source)
@@ -239,7 +312,12 @@ def load_spec(path: str | os.PathLike) -> Spec:
         raise OcctrackError("seeds only matter with simulated detections: with detections = "
                             "\"det\" give one seed (or none)", source)
     spec = Spec(path=path, kind=kind, trackers=tuple(trackers), seeds=tuple(seeds),
-                points=tuple(points), config=config, **spec_kwargs)
+                points=tuple(points), config=config, search=search, **spec_kwargs)
+    if search is not None:
+        # every setting checked at both ends of its range before any task runs
+        for end in (0, -1):
+            _checked(spec, {**base, **_law_end(search.laws, end)}, source)
+        return dataclasses.replace(spec, points=())
     return dataclasses.replace(spec, points=tuple(_checked(spec, p, source) for p in points))
 
 
@@ -288,27 +366,8 @@ def _random_points(table: dict, source: str) -> list[dict]:
         raise OcctrackError("[random] samples must be a whole number >= 1", source)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise OcctrackError("[random] seed must be a whole number >= 0", source)
-    laws = {k: v for k, v in table.items() if k not in ("samples", "seed")}
-    if not laws:
-        raise OcctrackError("[random] names no setting to draw", source)
-    for name, law in laws.items():
-        if not (isinstance(law, dict) and len(law) == 1 and next(iter(law)) in DISTRIBUTIONS):
-            raise OcctrackError(f"[random] {name} must be one of "
-                                + ", ".join(f"{{{d} = [...]}}" for d in DISTRIBUTIONS), source)
-        (how, args), = law.items()
-        if how == "choice":
-            if not isinstance(args, list) or not args:
-                raise OcctrackError(f"[random] {name}: choice needs a non-empty list", source)
-            continue
-        if not (isinstance(args, list) and len(args) == 2 and all(
-                isinstance(a, int | float) and not isinstance(a, bool) for a in args)
-                and args[0] <= args[1]):
-            raise OcctrackError(f"[random] {name}: {how} needs [low, high] with low <= high",
-                                source)
-        if how == "log_uniform" and args[0] <= 0:
-            raise OcctrackError(f"[random] {name}: log_uniform needs low > 0", source)
-        if how == "int_uniform" and not all(isinstance(a, int) for a in args):
-            raise OcctrackError(f"[random] {name}: int_uniform needs whole numbers", source)
+    laws = _laws({k: v for k, v in table.items() if k not in ("samples", "seed")}, "random",
+                 source)
     rng = np.random.default_rng(seed)
     points = []
     for _ in range(samples):
@@ -328,6 +387,64 @@ def _random_points(table: dict, source: str) -> list[dict]:
     return points
 
 
+def _laws(laws: dict, table: str, source: str) -> dict:
+    """The settings' distributions of a [random] or [search] table, checked."""
+    if not laws:
+        raise OcctrackError(f"[{table}] names no setting to draw", source)
+    for name, law in laws.items():
+        if not (isinstance(law, dict) and len(law) == 1 and next(iter(law)) in DISTRIBUTIONS):
+            raise OcctrackError(f"[{table}] {name} must be one of "
+                                + ", ".join(f"{{{d} = [...]}}" for d in DISTRIBUTIONS), source)
+        (how, args), = law.items()
+        if how == "choice":
+            if not isinstance(args, list) or not args:
+                raise OcctrackError(f"[{table}] {name}: choice needs a non-empty list", source)
+            continue
+        if not (isinstance(args, list) and len(args) == 2 and all(
+                isinstance(a, int | float) and not isinstance(a, bool) for a in args)
+                and args[0] <= args[1]):
+            raise OcctrackError(f"[{table}] {name}: {how} needs [low, high] with low <= high",
+                                source)
+        if how == "log_uniform" and args[0] <= 0:
+            raise OcctrackError(f"[{table}] {name}: log_uniform needs low > 0", source)
+        if how == "int_uniform" and not all(isinstance(a, int) for a in args):
+            raise OcctrackError(f"[{table}] {name}: int_uniform needs whole numbers", source)
+    return laws
+
+
+def _law_end(laws: dict, end: int) -> dict:
+    """Each setting at one end of its range (end 0: low / first choice, -1: high / last)."""
+    return {name: args[end] for name, law in laws.items() for args in law.values()}
+
+
+def _search(table: dict, kind: str, base: dict, source: str) -> Search:
+    """The [search] table, checked (its settings are checked against the schema later)."""
+    fields = {"kind", "trials", "metric", "direction", "seed", "batch"}
+    how = table.get("kind")
+    if how not in SEARCH_KINDS:
+        raise OcctrackError(f"[search] kind must be one of {', '.join(SEARCH_KINDS)}, not "
+                            f"{how!r}", source)
+    whole = {}
+    for name, default in (("trials", None), ("seed", 0), ("batch", 4)):
+        value = table.get(name, default)
+        low = 0 if name == "seed" else 1
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise OcctrackError(f"[search] {name} must be a whole number >= {low}", source)
+        whole[name] = value
+    metrics = {"mot": MOT_METRICS, "highway": HIGHWAY_METRICS, "lidar": LIDAR_METRICS}[kind]
+    metric = table.get("metric")
+    if metric not in metrics:
+        raise OcctrackError(f"[search] metric must be one of {', '.join(metrics)} (kind "
+                            f"{kind!r}), not {metric!r}", source)
+    direction = table.get("direction")
+    if direction not in DIRECTIONS:
+        raise OcctrackError(f"[search] direction must be \"maximize\" or \"minimize\", not "
+                            f"{direction!r}", source)
+    laws = _laws({k: v for k, v in table.items() if k not in fields}, "search", source)
+    return Search(how, whole["trials"], metric, direction, whole["seed"], whole["batch"], laws,
+                  base)
+
+
 def _checked(spec: Spec, point: dict, source: str) -> dict:
     """The point's settings, typed as their fields (so equal settings give equal keys), or
     OcctrackError naming the bad one, before any task runs."""
@@ -340,6 +457,13 @@ def _checked(spec: Spec, point: dict, source: str) -> dict:
         base = _config_values(spec.config)
         config = TrackerConfig.from_dict({**base, **point}, source)
         return {name: _plain(getattr(config, name)) for name in point}
+    if spec.kind == "lidar":
+        model = _beam_model(point, source)
+        far = [x for x in spec.ranges if x >= model.max_range]
+        if far:
+            raise OcctrackError(f"[work] ranges: {far[0]:g} m is not inside the sensor's "
+                                f"max_range {model.max_range:g} m", source)
+        return {name: float(getattr(model, name)) for name in point}
     sim, road, tracker = _split_highway(point, source)
     simulation, tracking = _highway_configs(spec.config, sim, road, tracker, source)
     typed = {}
@@ -351,6 +475,22 @@ def _checked(spec: Spec, point: dict, source: str) -> dict:
         else:
             typed[name] = getattr(tracking, name)
     return {name: _plain(value) for name, value in typed.items()}
+
+
+def _beam_model(point: dict, source: str):
+    """The lidar's BeamModel with a point's settings (its fields: p_d, sigma, clutter_rate,
+    max_range), or OcctrackError naming the bad one."""
+    from occtrack.models.beam import BeamModel
+
+    names = {f.name for f in dataclasses.fields(BeamModel)}
+    bad = sorted(set(point) - names)
+    if bad:
+        raise OcctrackError(f"unknown lidar setting {bad[0]!r}; the settings are "
+                            f"{', '.join(sorted(names))}", source)
+    try:
+        return BeamModel(**{k: float(v) for k, v in point.items()})
+    except (TypeError, ValueError) as err:
+        raise OcctrackError(f"lidar settings: {err}", source) from None
 
 
 def _plain(value):
@@ -379,22 +519,23 @@ def _split_highway(point: dict, source: str) -> tuple[dict, dict, dict]:
 
 
 def _highway_configs(path: Path | None, sim: dict, road: dict, tracker: dict, source: str):
-    """The highway's SimulationConfig and TrackerConfig from the spec's settings file (if any,
-    as for `occtrack simulate highway --config`) and a point's settings, which win; the tracker
-    matches the simulation's model unless set."""
-    from occtrack.highway.config import RoadConfig, SimulationConfig, TrackerConfig
+    """The highway's SimulationConfig and HighwayTrackerConfig from the spec's settings file
+    (if any, as for `occtrack simulate highway --config`) and a point's settings, which win;
+    the tracker matches the simulation's model unless set (`occtrack.config.highway`)."""
+    from occtrack.config.highway import (
+        HighwayTrackerConfig,
+        RoadConfig,
+        SimulationConfig,
+        highway_from_dict,
+    )
 
-    file_sim: dict = {}
-    file_road: dict = {}
-    file_tracker: dict = {}
+    data: dict = {}
     if path is not None:
         from occtrack.config import load_toml
 
         data = load_toml(path)
-        file_sim = dict(data.get("simulation", {}))
-        file_road = dict(file_sim.pop("road", {}))
-        file_tracker = dict(data.get("tracker", {}))
-    known = {"simulation.": SimulationConfig, "simulation.road.": RoadConfig, "": TrackerConfig}
+    known = {"simulation.": SimulationConfig, "simulation.road.": RoadConfig,
+             "": HighwayTrackerConfig}
     for prefix, values in (("simulation.", sim), ("simulation.road.", road), ("", tracker)):
         names = {f.name for f in dataclasses.fields(known[prefix])} - {"road"}
         bad = sorted(set(values) - names)
@@ -402,16 +543,17 @@ def _highway_configs(path: Path | None, sim: dict, road: dict, tracker: dict, so
             raise OcctrackError(f"unknown highway setting {prefix + bad[0]!r}; highway settings "
                                 f"are the tracker's fields, simulation.NAME and "
                                 f"simulation.road.NAME", source)
-    try:
-        road_config = RoadConfig(**{**file_road, **road})
-        simulation = SimulationConfig(**{**file_sim, **sim, "road": road_config})
-        simulation.validate()
-        tracking = TrackerConfig.matching(simulation, **{**file_tracker, **tracker})
-        tracking.validate()
-    except (TypeError, ValueError, OcctrackError) as err:
-        message = err.message if isinstance(err, OcctrackError) else str(err)
-        raise OcctrackError(message, source) from None
-    return simulation, tracking
+    file_sim = data.get("simulation", {})
+    file_road = file_sim.get("road", {}) if isinstance(file_sim, dict) else {}
+    merged = {**data, "tracker": _merged(data.get("tracker", {}), tracker),
+              "simulation": _merged(file_sim, {**sim, "road": _merged(file_road, road)})}
+    return highway_from_dict(merged, source)
+
+
+def _merged(table, overrides: dict):
+    """A settings table with a point's settings over it (a table that is not one is left for
+    the schema to refuse)."""
+    return {**table, **overrides} if isinstance(table, dict) else table
 
 
 # ----------------------------------------------------------------------------------------------
@@ -435,6 +577,8 @@ def plan(spec: Spec) -> list[Cell]:
         if len(set(names)) < len(names):
             raise OcctrackError("two sequence folders share a name in seqinfo.ini",
                                 str(spec.path))
+    elif spec.kind == "lidar":
+        works = [(f"x={x:g}m", repr(x)) for x in spec.ranges]
     else:
         works = [(sensor, "") for sensor in spec.sensors]
     for (work, source), tracker, point, seed in itertools.product(
@@ -446,7 +590,7 @@ def plan(spec: Spec) -> list[Cell]:
             identity["detections"] = spec.detections
             identity["protocol"] = "mot17"
         else:
-            identity["steps"] = spec.steps
+            identity["steps"] = spec.steps  # lidar: simulated beams per case
         key = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()[:20]
         cells.append(Cell(index=len(cells), key=key, kind=spec.kind, work=work,
                           tracker=tracker, seed=seed, settings=settings, source=source,
@@ -468,21 +612,13 @@ class Failure:
     traceback: str = ""
 
 
-_SEQUENCES: dict = {}
 _SIMULATED: dict = {}
 
 
 def _sequence(folder: str):
-    """The sequence folder, read once per process (a worker keeps it for later tasks)."""
-    from occtrack.experiments.benchmark import load_sequence
+    from occtrack.experiments.benchmark import cached_sequence
 
-    path = Path(folder)
-    stamp = tuple((path / part).stat().st_mtime_ns
-                  for part in ("seqinfo.ini", "det/det.txt", "gt/gt.txt"))
-    cached = _SEQUENCES.get(folder)
-    if cached is None or cached[0] != stamp:
-        _SEQUENCES[folder] = (stamp, load_sequence(path))
-    return _SEQUENCES[folder][1]
+    return cached_sequence(folder)
 
 
 def _detections(cell: Cell, seq):
@@ -529,7 +665,7 @@ def _run_mot(cell: Cell) -> dict:
 
 
 def _run_highway(cell: Cell) -> dict:
-    from occtrack.highway.score import evaluate
+    from occtrack.experiments.highway import evaluate
 
     sim, road, tracker = _split_highway(cell.values, "sweep settings")
     simulation, tracking = _highway_configs(Path(cell.config) if cell.config else None, sim,
@@ -542,10 +678,41 @@ def _run_highway(cell: Cell) -> dict:
             "n_false": score.n_false, "tracks": score.tracks, "seconds": seconds}
 
 
+def _run_lidar(cell: Cell) -> dict:
+    """The derived beam likelihood ratio L against `cell.steps` simulated beams with and
+    without the object (as `occtrack lidar` checks it), at five ranges: per range bin, with
+    n_o beams with the object and n_e without landing in it, z = (n_o - L n_e) /
+    sqrt(L n_e (1 + L)), the Poisson standard score of the derivation (0 where no beam
+    landed)."""
+    import numpy as np
+
+    from occtrack.models.beam import likelihood_ratio
+    from occtrack.scenarios.lidar import simulate_beams
+
+    model = _beam_model(cell.values, "sweep settings")
+    x, s = float(cell.source), model.sigma
+    rng = np.random.default_rng(cell.seed)
+    start = time.perf_counter()
+    probes = np.array([x / 2, x - 3 * s, x, x + 2 * s, x + 6 * s])
+    half = s / 4
+    edges = np.sort(np.concatenate([probes - half, probes + half]))
+    with_object = np.histogram(simulate_beams(x, model, cell.steps, rng), edges)[0][::2]
+    without = np.histogram(simulate_beams(None, model, cell.steps, rng), edges)[0][::2]
+    derived = np.array([np.mean(likelihood_ratio(np.linspace(z - half, z + half, 201), x,
+                                                 model)) for z in probes])
+    spread = np.sqrt(derived * without * (1 + derived))
+    z = np.divide(with_object - derived * without, spread, out=np.zeros(len(probes)),
+                  where=spread > 0)
+    names = ("l_hidden", "l_before", "l_hit", "l_after", "l_passed")
+    return {"max_z": float(np.abs(z).max()), **dict(zip(names, derived.tolist(), strict=True)),
+            "l_none": 1.0 - model.p_d, "samples": cell.steps,
+            "seconds": time.perf_counter() - start}
+
+
 def run_cell(cell: Cell) -> dict:
     """Run one cell and return its row; raises whatever the work raises."""
     start, cpu = time.perf_counter(), time.process_time()
-    metrics = _run_mot(cell) if cell.kind == "mot" else _run_highway(cell)
+    metrics = {"mot": _run_mot, "highway": _run_highway, "lidar": _run_lidar}[cell.kind](cell)
     row = {"cell": cell.key, "kind": cell.kind, "work": cell.work, "tracker": cell.tracker,
            "seed": cell.seed, "settings": cell.settings}
     row.update({SETTING_PREFIX + name: value for name, value in cell.values.items()})
@@ -572,14 +739,16 @@ def run_task(cell: Cell) -> dict | Failure:
 
 def warm(kind: str) -> None:
     """Import the modules a task of `kind` uses (a worker's first task would otherwise pay)."""
-    if kind == "mot":
+    if kind == "benchmark":
+        import occtrack.experiments.benchmark  # noqa: F401
+    if kind == "lidar":
+        import occtrack.models.beam  # noqa: F401
+    elif kind in ("mot", "benchmark"):
         import occtrack.metrics.protocols  # noqa: F401
         import occtrack.metrics.trackeval_mot17  # noqa: F401
         import occtrack.tracker  # noqa: F401
     else:
-        import occtrack.highway.score  # noqa: F401
-        import occtrack.highway.simulate  # noqa: F401
-        import occtrack.highway.tracker  # noqa: F401
+        import occtrack.experiments.highway  # noqa: F401
 
 
 def run_sequential(cells: list[Cell]) -> Iterator[tuple[Cell, dict | Failure]]:
@@ -666,21 +835,36 @@ class DaskEngine:
             cluster.close()
 
     def run(self, cells: list[Cell]) -> Iterator[tuple[Cell, dict | Failure]]:
+        for cell, row, err in self.map(run_task, cells):
+            # run_task returns its own failures: an error here is the worker itself dying
+            # (memory, a crash)
+            yield cell, (Failure(cell, f"{type(err).__name__}: {err}") if err else row)
+
+    def map(self, fn: Callable, items: list) -> Iterator[tuple[object, object, BaseException
+                                                                | None]]:
+        """fn(item) for every item, each one task, yielded as (item, result, None) or (item,
+        None, what it raised) as they finish; the others go on after a failure."""
         from dask.distributed import as_completed
 
         client = self._client
-        futures = {client.submit(run_task, cell, pure=False): cell for cell in cells}
+        futures = {client.submit(fn, item, pure=False): i for i, item in enumerate(items)}
         try:
             for future in as_completed(futures):
-                cell = futures[future]
-                if future.status == "error":  # the worker itself died (memory, a crash)
-                    err = future.exception()
-                    yield cell, Failure(cell, f"{type(err).__name__}: {err}")
+                item = items[futures[future]]
+                if future.status == "error":
+                    yield item, None, future.exception()
                 else:
-                    yield cell, future.result()
+                    yield item, future.result(), None
                 future.release()
         finally:
             client.cancel([f for f in futures if not f.done()])
+
+
+def dask_available() -> bool:
+    """Whether Dask distributed can be imported (the `sweep` extra)."""
+    import importlib.util
+
+    return all(importlib.util.find_spec(name) is not None for name in ("dask", "distributed"))
 
 
 def available_cores() -> int:
@@ -759,7 +943,8 @@ def _column_order(columns) -> list[str]:
 @dataclass
 class Outcome:
     """What a sweep did: the whole table, the cells of this plan, how many ran and were
-    skipped, the failures, the seconds the tasks took (wall) and the engine's start-up."""
+    skipped, the failures, the seconds the tasks took (wall) and the engine's start-up; for a
+    search, a line per study on its best trial."""
 
     table: object
     cells: list[Cell]
@@ -769,54 +954,164 @@ class Outcome:
     seconds: float
     startup_seconds: float = 0.0
     engine: str = ""
+    notes: list[str] = field(default_factory=list)
+
+
+class _Store:
+    """The table being filled: the rows already in it, the new ones, rewritten every
+    `flush_seconds` and at the end; rows in the order of `order` (cell key -> index)."""
+
+    def __init__(self, output, flush_seconds: float):
+        self.output = output
+        self.old = read_table(output)
+        self.done = set(self.old["cell"]) if len(self.old) else set()
+        self.rows: list[dict] = []
+        self.order: dict[str, int] = {}
+        self.flush_seconds = flush_seconds
+        self.last = time.perf_counter()
+        self.table = self.old
+
+    def add(self, row: dict) -> None:
+        self.rows.append(row)
+        if time.perf_counter() - self.last >= self.flush_seconds:
+            self.write()
+
+    def write(self) -> None:
+        self.table = write_table(self.output, self.old, self.rows, self.order)
+        self.last = time.perf_counter()
+
+    def close(self) -> None:
+        if self.rows or not Path(self.output).exists():
+            self.write()
 
 
 def sweep(spec: Spec, output: str | os.PathLike, engine: DaskEngine | None = None,
           quiet: bool = True, on_result: Callable[[Cell, dict | Failure], None] | None = None,
           flush_seconds: float = FLUSH_SECONDS) -> Outcome:
-    """Run every cell of `spec` not yet in the table at `output`, on `engine` (None: in this
-    process), writing the table as results come in."""
+    """Run every cell of `spec` not yet in the table at `output` (a [search]: the cells of
+    its trials), on `engine` (None: in this process), writing the table as results come
+    in."""
     from occtrack.io.atomic import check_output
     from occtrack.progress import progress
 
     check_output(output, overwrite=True, inputs=(spec.path,))
-    cells = plan(spec)
-    old = read_table(output)
-    done = set(old["cell"]) if len(old) else set()
-    todo = [cell for cell in cells if cell.key not in done]
-    order = {cell.key: cell.index for cell in cells}
-    rows: list[dict] = []
+    store = _Store(output, flush_seconds)
     failures: list[Failure] = []
-    table = old
+    skipped = 0
+    warmed = False
     with contextlib.ExitStack() as stack:
-        if engine is not None and todo:
-            if not engine.started:  # else the caller started it and stops it
-                stack.enter_context(engine)
-            engine.warm(spec.kind)
-        start = time.perf_counter()
-        last_flush = start
-        results: Iterable = run_sequential(todo) if engine is None else engine.run(todo)
-        try:
+
+        def execute(cells: list[Cell]) -> dict[str, dict | Failure]:
+            """Run the cells not in the table yet; their rows or failures by cell key."""
+            nonlocal skipped, warmed
+            store.order.update({cell.key: cell.index for cell in cells})
+            todo = list({cell.key: cell for cell in reversed(cells)
+                         if cell.key not in store.done}.values())[::-1]
+            skipped += len(cells) - len(todo)
+            if engine is not None and todo and not warmed:
+                if not engine.started:  # else the caller started it and stops it
+                    stack.enter_context(engine)
+                engine.warm(spec.kind)
+                warmed = True
+            out: dict[str, dict | Failure] = {}
+            results: Iterable = run_sequential(todo) if engine is None else engine.run(todo)
             for cell, result in progress(results, len(todo), "sweep", quiet):
+                out[cell.key] = result
                 if isinstance(result, Failure):
                     failures.append(result)
                 else:
-                    rows.append(result)
+                    store.add(result)
+                    store.done.add(cell.key)
                 if on_result is not None:
                     on_result(cell, result)
-                if rows and time.perf_counter() - last_flush >= flush_seconds:
-                    table = write_table(output, old, rows, order)
-                    last_flush = time.perf_counter()
+            return out
+
+        start = time.perf_counter()
+        notes: list[str] = []
+        try:
+            if spec.search is None:
+                cells = plan(spec)
+                execute(cells)
+            else:
+                cells, notes = _run_search(spec, execute, store)
         finally:
             seconds = time.perf_counter() - start
-            if rows or not Path(output).exists():
-                table = write_table(output, old, rows, order)
+            store.close()
     failures.sort(key=lambda f: f.cell.index)
-    return Outcome(table=table, cells=cells, ran=len(rows), skipped=len(cells) - len(todo),
+    return Outcome(table=store.table, cells=cells, ran=len(store.rows), skipped=skipped,
                    failures=failures, seconds=seconds,
                    startup_seconds=engine.startup_seconds if engine else 0.0,
                    engine=(engine.describe or "no engine (nothing to run)") if engine
-                   else "this process, one task at a time")
+                   else "this process, one task at a time", notes=notes)
+
+
+def _distribution(law: dict):
+    import optuna
+
+    (how, args), = law.items()
+    if how == "choice":
+        return optuna.distributions.CategoricalDistribution(args)
+    if how == "int_uniform":
+        return optuna.distributions.IntDistribution(args[0], args[1])
+    return optuna.distributions.FloatDistribution(float(args[0]), float(args[1]),
+                                                  log=how == "log_uniform")
+
+
+def _run_search(spec: Spec, execute: Callable, store: _Store) -> tuple[list[Cell], list[str]]:
+    """Ask each tracker's study for `batch` trials at a time, run their cells, tell each trial
+    the mean of the metric over its cells (a failed cell fails the trial), until `trials`
+    trials; the cells in trial order and a line per study on its best trial."""
+    try:
+        import optuna
+    except ImportError:
+        raise OcctrackError("[search] kind = \"optuna\" needs Optuna: pip install "
+                            "\"occtrack[sweep]\" (or optuna)", str(spec.path)) from None
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    search = spec.search
+    distributions = {name: _distribution(law) for name, law in search.laws.items()}
+    studies = {tracker: optuna.create_study(
+        direction=search.direction, sampler=optuna.samplers.TPESampler(seed=search.seed))
+        for tracker in spec.trackers}
+    known: dict[str, float | None] = {}  # cell key -> metric (None: failed)
+    if len(store.old) and search.metric in store.old.columns:
+        known.update(zip(store.old["cell"], store.old[search.metric].astype(float),
+                         strict=True))
+    cells: list[Cell] = []
+    points: dict[tuple[str, int], dict] = {}
+    while len(points) < search.trials * len(spec.trackers):
+        asked = len(points) // len(spec.trackers)
+        batch = []
+        for tracker in spec.trackers:
+            for _ in range(min(search.batch, search.trials - asked)):
+                trial = studies[tracker].ask(distributions)
+                point = _checked(spec, {**search.base, **trial.params}, str(spec.path))
+                points[tracker, trial.number] = point
+                one = dataclasses.replace(spec, trackers=(tracker,), points=(point,),
+                                          search=None)
+                mine = [dataclasses.replace(cell, index=len(cells) + i)
+                        for i, cell in enumerate(plan(one))]
+                cells += mine
+                batch.append((tracker, trial, mine))
+        results = execute([cell for _, _, mine in batch for cell in mine])
+        known.update({key: None if isinstance(result, Failure) else float(result[search.metric])
+                      for key, result in results.items()})
+        for tracker, trial, mine in batch:
+            values = [known[cell.key] for cell in mine]
+            if any(v is None for v in values):
+                studies[tracker].tell(trial, state=optuna.trial.TrialState.FAIL)
+            else:
+                studies[tracker].tell(trial, sum(values) / len(values))
+    notes = []
+    for tracker, study in studies.items():
+        done = [t for t in study.trials if t.state == optuna.trial.TrialState.COMPLETE]
+        if not done:
+            notes.append(f"{tracker}: no trial finished")
+            continue
+        best = study.best_trial
+        settings = ", ".join(f"{k}={_show(v)}" for k, v in points[tracker, best.number].items())
+        notes.append(f"{tracker}: best {search.metric} {best.value:.4f} (trial {best.number} "
+                     f"of {len(study.trials)}, {search.direction}): {settings}")
+    return cells, notes
 
 
 # ----------------------------------------------------------------------------------------------
@@ -865,7 +1160,7 @@ def summarise(table, cells: list[Cell]) -> str:
     seed_text = (f"seed {seeds[0]}" if len(seeds) == 1 else
                  f"mean +- standard error over {len(seeds)} seeds")
     lines.append(f"{kind} sweep: {seed_text}")
-    work_title = "sequence" if kind == "mot" else "simulated"
+    work_title = {"mot": "sequence", "lidar": "object"}.get(kind, "simulated")
     header = f"  {work_title:<18}{'tracker':<20}{'point':<7}{'n':>3}" + "".join(
         f"{title:>18}" for _, title in headline)
     lines.append(header)
@@ -883,7 +1178,7 @@ def summarise(table, cells: list[Cell]) -> str:
                              f"{len(sel):>3}" + "".join(f"{_cellfmt(*s):>18}" for s in stats))
     if len(works) > 1:
         lines += ["", f"mean over the {len(works)} "
-                  + ("sequences" if kind == "mot" else "simulations")
+                  + {"mot": "sequences", "lidar": "ranges"}.get(kind, "simulations")
                   + ("" if len(seeds) == 1 else ", +- standard error over seeds of each "
                                                 "seed's mean"),
                   f"  {'tracker':<20}{'point':<7}{'n':>3}"

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from occtrack.cli.arguments import positive_int, seed_int
+from occtrack.config.arguments import positive_int, seed_int
 from occtrack.errors import OcctrackError
 from occtrack.io.data import find_sequence
 from occtrack.io.mot import MotTable, read_mot, read_seqinfo

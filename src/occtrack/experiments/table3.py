@@ -1,10 +1,11 @@
 """Paper Table III: GOSPA per step of three highway trackers under two simulated occlusions.
 
-Every (simulation, tracker, seed) cell is one run of `occtrack.highway.score.evaluate`; the
+Every (simulation, tracker, seed) cell is one run of `occtrack.experiments.highway.evaluate`; the
 three trackers of one simulation and seed see the very same cars and measurements. Seeds are
-1..K. Cells run in worker processes (`--jobs`), each deterministic, so the table does not
-depend on how the work is shared out; `--dask` or `--scheduler ADDRESS` runs them as tasks of
-`occtrack sweep`'s Dask engine instead (the same cells, the same table).
+1..K. Each cell is deterministic, so the table does not depend on how the work is shared out:
+by default the cells are tasks of `occtrack sweep`'s Dask engine (a LocalCluster of `--jobs`
+workers, or the cluster at `--scheduler ADDRESS`); `--jobs 1` runs them in this process, and
+without Dask (the `sweep` extra) they go to `--jobs` worker processes.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ PAPER = {"object-wise": {"object-wise-expval": 4.94, "object-wise-grid": 4.79,
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    from occtrack.cli.arguments import positive_int
+    from occtrack.config.arguments import positive_int
 
     parser.add_argument("--steps", type=positive_int, default=10000,
                         help="time steps per run (default 10000, as in the paper)")
@@ -56,11 +57,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="other settings ([simulation], [simulation.road], [tracker] tables, "
                              "as for occtrack simulate highway); the paper's by default")
     parser.add_argument("--jobs", type=positive_int, default=2,
-                        help="worker processes (default 2)")
+                        help="worker processes (default 2; 1: in this process, no Dask)")
     engine = parser.add_mutually_exclusive_group()
     engine.add_argument("--dask", action="store_true",
                         help="run the cells as Dask tasks on a LocalCluster of --jobs workers "
-                             "(occtrack sweep's machinery; needs the sweep extra)")
+                             "(occtrack sweep's machinery, the default when the sweep extra "
+                             "is installed and --jobs > 1; an error without it)")
     engine.add_argument("--scheduler", metavar="ADDRESS",
                         help="run the cells as Dask tasks on a running cluster, e.g. "
                              "tcp://127.0.0.1:8786")
@@ -69,7 +71,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _cell(sensor: str, tracker: str, steps: int, seed: int, simulation, tracking):
-    from occtrack.highway.score import evaluate
+    from occtrack.experiments.highway import evaluate
 
     score, seconds = evaluate(simulation, tracking, sensor, tracker, steps, seed)
     return sensor, tracker, seed, score, seconds
@@ -78,10 +80,10 @@ def _cell(sensor: str, tracker: str, steps: int, seed: int, simulation, tracking
 def compute(steps: int, seeds: int, jobs: int = 2, quiet: bool = True, simulation=None,
             tracking=None) -> dict:
     """{sensor: {tracker: [(score, seconds) per seed, in seed order]}}."""
-    from occtrack.highway.config import SimulationConfig, TrackerConfig
+    from occtrack.config.highway import HighwayTrackerConfig, SimulationConfig
 
     simulation = simulation or SimulationConfig()
-    tracking = tracking or TrackerConfig.matching(simulation)
+    tracking = tracking or HighwayTrackerConfig.matching(simulation)
     work = [(s, t, steps, seed, simulation, tracking) for seed in range(1, seeds + 1)
             for s in SENSORS for t in TRACKERS]
     done: dict = {s: {t: {} for t in TRACKERS} for s in SENSORS}
@@ -106,7 +108,7 @@ def compute_on_dask(steps: int, seeds: int, config: Path | None = None,
     """`compute`'s result with every cell a task of `occtrack sweep`'s Dask engine (the
     same cells and seeds, so the same table)."""
     from occtrack.experiments import sweep
-    from occtrack.highway.score import HighwayScore
+    from occtrack.metrics.highway import HighwayScore
 
     spec = sweep.Spec(path=config or Path("table3"), kind="highway", trackers=TRACKERS,
                       seeds=tuple(range(1, seeds + 1)), points=({},), sensors=SENSORS,
@@ -186,11 +188,13 @@ def run(args: argparse.Namespace) -> int:
         raise OcctrackError("--steps and --seeds must be at least 1")
     simulation = tracking = None
     if args.config is not None:
-        from occtrack.highway.config import load_config
+        from occtrack.config.highway import load_highway
 
-        simulation, tracking = load_config(args.config)
+        simulation, tracking = load_highway(args.config)
     start = time.perf_counter()
-    if args.dask or args.scheduler:
+    from occtrack.experiments.sweep import dask_available
+
+    if args.dask or args.scheduler or (args.jobs > 1 and dask_available()):
         result = compute_on_dask(args.steps, args.seeds, args.config, args.scheduler,
                                  args.jobs, args.quiet)
     else:

@@ -75,19 +75,23 @@ says; leaving such edges out splits a crowd's graph into the clusters that reall
 (benchmarks/bench_gating.py: no MOT17 metric moves).
 
 Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
-pluggable miss term.
+pluggable miss term. The loops over components, pairs and cells (the `_`-prefixed functions at
+the end of this module) are compiled (`occtrack.jit`): a frame is too small for numpy's
+per-call overhead to pay off.
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
 
 from occtrack.association import lbp_sparse
 from occtrack.config import TrackerConfig
+from occtrack.jit import njit
 from occtrack.models.birth import EdgeBirths
-from occtrack.models.box import BoxMeasurement, heights
+from occtrack.models.box import MIN_HEIGHT, BoxMeasurement
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import OcclusionContext, OcclusionModel
@@ -201,19 +205,8 @@ class GaussianMixturePMB:
         """(r, mean state, centre standard deviation (L, 2) in px) of every slot: the moments
         of its mixture, spread of the means included."""
         n = self.n
-        lab = self.label[:n] >= 0
-        idx, w = self.label[:n][lab], self.mass[:n][lab]
-        L = len(self.slot_used)
-        r = np.bincount(idx, weights=w, minlength=L)
-        share = w / np.maximum(r[idx], 1e-300)
-        flat = self.mean[:n][lab].reshape(-1, 6)
-        means = np.stack([np.bincount(idx, weights=share * flat[:, c], minlength=L)
-                          for c in range(6)], axis=1).reshape(L, 2, 3)
-        centre = self.mean[:n][lab][:, :, 0]
-        spread = self.cov[:n][lab][:, :, 0, 0] + (centre - means[idx, :, 0]) ** 2
-        var = np.stack([np.bincount(idx, weights=share * spread[:, a], minlength=L)
-                        for a in range(2)], axis=1)
-        return r, means, np.sqrt(var)
+        return _object_moments(self.label[:n], self.mass[:n], self.mean[:n], self.cov[:n],
+                               len(self.slot_used))
 
     def confirmed(self) -> np.ndarray:
         """Which slots have been detected in `confirm_hits` tracked frames."""
@@ -260,26 +253,21 @@ class GaussianMixturePMB:
         """Carry every component along an image motion x -> scale * x + shift per axis:
         centres move, velocities and half-sizes scale, covariances scale by scale^2."""
         n = self.n
-        scale, shift = np.asarray(scale, dtype=float), np.asarray(shift, dtype=float)
-        self.mean[:n] *= scale[:, None]
-        self.mean[:n, :, 0] += shift
-        self.cov[:n] *= (scale**2)[:, None, None]
+        _move_in_place(self.mean[:n], self.cov[:n], np.asarray(scale, dtype=float),
+                       np.asarray(shift, dtype=float))
 
     def _predict(self) -> None:
         n = self.n
         if n == 0:
             return
-        unit = heights(self.mean[:n])
-        coasting = self.coast[:n] > 0.5 * self.dt  # (merged components average it)
-        for model, group in ((self.motion, ~coasting), (self.coast_motion, coasting)):
-            if group.any():
-                self.mean[:n][group], self.cov[:n][group] = model.predict(
-                    self.mean[:n][group], self.cov[:n][group], unit[group])
-        self.det[:n] = self.detectability.predict(self.det[:n], self.dt)
-        self.occ[:n] = self.occludability.predict(self.occ[:n], self.dt)
-        centre, half = self.mean[:n, :, 0], self.mean[:n, :, 2]
-        inside = ((centre >= 0) & (centre <= self.image_size) & (half >= 1.0)).all(axis=1)
-        self.mass[:n] *= np.where(inside, self.survival_inside, self.config.exit_survival)
+        _predict_in_place(self.mean[:n], self.cov[:n], self.coast[:n] > 0.5 * self.dt,
+                          self.motion.F, self.motion.Q, self.coast_motion.F,
+                          self.coast_motion.Q)
+        for values, feature in ((self.det[:n], self.detectability),
+                                (self.occ[:n], self.occludability)):
+            _relax_in_place(values, feature.stationary, feature.memory(self.dt))
+        _survive_in_place(self.mass[:n], self.mean[:n], self.image_size, self.survival_inside,
+                          self.config.exit_survival)
 
     def _size_prior(self) -> tuple[np.ndarray, np.ndarray]:
         c = self.config
@@ -299,12 +287,7 @@ class GaussianMixturePMB:
         return mean, np.maximum(std, 1.0)
 
     def _learn_sizes(self, z: np.ndarray, observed: np.ndarray) -> None:
-        full = observed.all(axis=(1, 2))
-        if not full.any():
-            return
-        half = 0.5 * (z[full, :, 1] - z[full, :, 0])
-        self._size_stats += np.stack([np.full(2, float(full.sum())), half.sum(axis=0),
-                                      (half**2).sum(axis=0)])
+        _count_sizes(z, observed, self._size_stats)
 
     def _add_births(self) -> None:
         c = self.config
@@ -362,50 +345,26 @@ class GaussianMixturePMB:
 
         # hit weights l_kj of the pairs (component pk, detection pj) that can associate
         pk, pj, log_hit, cand = self._pairs(mean, cov, z, observed, rows, A)
-        if len(pk):
-            if seen_hidden.any():
-                # a source not yet confirmed is weighed like clutter, with the stationary o:
-                # were it taken as never occludable, a detection in a crowd would start a new
-                # track more easily than it is called clutter
-                o_seen = np.where(established, occ, c.occludability)[pk]
-                seen = det[pk] * (1.0 - o_seen + o_seen * v[pk] * (1.0 - seen_hidden[pj]))
-                log_hit += np.log(np.maximum(mass[pk] * seen, 1e-300))
-            else:
-                log_hit += np.log(np.maximum(mass * pd, 1e-300))[pk]
-        # below e^-300 a pair is impossible; cutting there also keeps subnormal numbers,
-        # which are slow to compute with, out of the arrays
-        possible = log_hit > LOG_FLOOR
-        if classes is not None and len(pk):  # an object never takes a detection of another class
-            lab = label[pk]
-            possible &= (lab < 0) | (self.slot_class[np.maximum(lab, 0)] == classes[pj])
-        pk, pj, hit = pk[possible], pj[possible], np.exp(log_hit[possible])
-        cand_of_pair = None if cand is None else cand[2][possible]
-
-        r_obj = np.zeros(A + 1)
-        miss_mass = np.zeros(A + 1)
-        if n:
-            starts = np.flatnonzero(np.diff(rows, prepend=-1))
-            r_obj[rows[starts]] = np.add.reduceat(mass, starts)
-            miss_mass[rows[starts]] = np.add.reduceat(mass * miss, starts)
-            hidden_mass = np.add.reduceat(mass * det * occ * (1.0 - v + v * q), starts)
-            self.slot_hidden[:] = 0.0
-            inside = rows[starts] < A
-            self.slot_hidden[slots[rows[starts][inside]]] = hidden_mass[inside] / np.maximum(
-                miss_mass[rows[starts][inside]], 1e-300)
-        r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
-        # L_ij = sum_{k in i} l_kj on the object-detection pairs (edges), L_0j of the Poisson part
-        prow = rows[pk]
-        mine = prow < A
-        poisson_hit = np.bincount(pj[~mine], weights=hit[~mine], minlength=M)
         if cand is None:  # every (object, detection) pair is a candidate edge
             cand_row, cand_col = np.divmod(np.arange(A * M), max(M, 1))
-            cand_of_pair = prow * M + pj
+            cand_of_pair = rows[pk] * M + pj
         else:
-            cand_row, cand_col = cand[0], cand[1]
-        L_cand = np.bincount(cand_of_pair[mine], weights=hit[mine], minlength=len(cand_row))
-        live = L_cand > 0
-        e_row, e_col, L_edge = cand_row[live], cand_col[live], L_cand[live]
-        edge_of_pair = (np.cumsum(live) - 1)[cand_of_pair[mine]]
+            cand_row, cand_col, cand_of_pair = cand
+        # a source not yet confirmed is weighed like clutter, with the stationary o: were it
+        # taken as never occludable, a detection in a crowd would start a new track more
+        # easily than it is called clutter
+        o_seen = np.where(established, occ, c.occludability)
+        pk, pj, hit, edge_of_pair, poisson_hit, e_row, e_col, L_edge = _hit_edges(
+            pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass, det, o_seen,
+            v, seen_hidden, pd, bool(seen_hidden.any()), label, self.slot_class,
+            np.zeros(0, dtype=np.int64) if classes is None else classes)
+        mine = edge_of_pair >= 0
+
+        r_obj, miss_mass, hidden_mass = _object_sums(rows, A + 1, mass, miss,
+                                                     det * occ * (1.0 - v + v * q))
+        self.slot_hidden[:] = 0.0
+        self.slot_hidden[slots] = hidden_mass[:A] / np.maximum(miss_mass[:A], 1e-300)
+        r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
         W, H = self.image_size
         size = np.maximum((z[:, :, 1] - z[:, :, 0]).prod(axis=1), 1.0)
         clutter = c.clutter_rate / (W * H * size) * np.clip(scores, c.score_floor, 1.0) ** (
@@ -425,7 +384,7 @@ class GaussianMixturePMB:
         hit_factor = (marg.p_new / w_new)[pj]
         edge_factor = np.zeros(len(L_edge))
         edge_factor[strong] = marg.p_hit / L_edge[strong]
-        hit_factor[mine] = edge_factor[edge_of_pair]
+        hit_factor[mine] = edge_factor[edge_of_pair[mine]]
         miss_factor = np.append(marg.p_miss / miss_obj, 1.0)
         # children: one miss child per component, then one hit child per pair
         children = np.concatenate([mass * miss * miss_factor[rows], hit * hit_factor])
@@ -445,25 +404,15 @@ class GaussianMixturePMB:
         new_mean = mean[parent]
         new_cov = cov[parent]
         new_label = label[parent]
-        d, o, vv, qq, mm = det[parent], occ[parent], v[parent], q[parent], miss[parent]
-        is_hit = j >= 0
-        # Bayes for the features. Missed: P(D=1 | miss) = d o (1 - v + v q) / miss and
-        # P(O=1 | miss) = o (1 - d + d (1 - v + v q)) / miss. Hit by z_j: D = 1 and
-        # P(O=1 | hit) = o v (1 - h_j) / (1 - o + o v (1 - h_j)).
-        hidden_if_occludable = 1.0 - vv + vv * qq
-        new_det = np.where(is_hit, 1.0, d * o * hidden_if_occludable / np.maximum(mm, 1e-300))
-        escaped = vv * (1.0 - seen_hidden[np.maximum(j, 0)]) if M else vv
-        seen_o = o * escaped / np.maximum(1.0 - o + o * escaped, 1e-300)
-        missed_o = o * (1.0 - d + d * hidden_if_occludable) / np.maximum(mm, 1e-300)
-        new_occ = np.where(established[parent], np.where(is_hit, seen_o, missed_o),
-                           self.occ[:n][parent])
-        new_coast = np.where(is_hit, 0.0, coast[parent] + self.dt)
-        h = np.flatnonzero(is_hit)
+        new_det, new_occ, new_coast = _child_features(
+            parent, j, det, occ, self.occ[:n], established, v, q, miss, seen_hidden, coast,
+            self.dt)
+        h = np.flatnonzero(j >= 0)
         if len(h):
             new_mean[h], new_cov[h] = self.measurement.update(
                 new_mean[h], new_cov[h], z[j[h]], observed[j[h]])
 
-        newborn = np.where(is_hit & (new_label < 0), j, -1)
+        newborn = np.where((j >= 0) & (new_label < 0), j, -1)
         new_label = self._assign_labels(new_mass, new_label, newborn, M, classes)
         new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label = self._merge(
             new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label)
@@ -577,24 +526,8 @@ class GaussianMixturePMB:
         its density loses the tail. `mass` is scaled in place. A Bernoulli born this step is
         the Poisson part's hit children of its measurement (label -1, `measurement` j >= 0);
         the Poisson part's miss children (j = -1) are an intensity and are not trimmed."""
-        cap = self.config.max_components_per_object
-        born = (label < 0) & (measurement >= 0)
-        label = np.where(born, len(self.slot_used) + measurement, label)
-        order = np.lexsort([-mass, label])
-        grouped = label[order]
-        start = np.flatnonzero(np.diff(grouped, prepend=grouped[:1] - 1))
-        sizes = np.diff(np.append(start, len(order)))
-        rank = np.arange(len(order)) - np.repeat(start, sizes)
-        drop = (rank >= cap) & (grouped >= 0)
-        if not drop.any():
-            return np.ones(len(mass), dtype=bool)
-        total = np.add.reduceat(mass[order], start)
-        kept_total = np.add.reduceat(np.where(drop, 0.0, mass[order]), start)
-        scale = total / np.maximum(kept_total, 1e-300)
-        mass[order] *= np.repeat(scale, sizes)
-        keep = np.ones(len(mass), dtype=bool)
-        keep[order[drop]] = False
-        return keep
+        return _trim(mass, label, measurement, self.config.max_components_per_object,
+                     len(self.slot_used))
 
     def _assign_labels(self, mass: np.ndarray, label: np.ndarray, newborn: np.ndarray,
                        M: int, classes: np.ndarray | None = None) -> np.ndarray:
@@ -660,54 +593,19 @@ class GaussianMixturePMB:
         if len(mass) < 2:
             return mass, mean, cov, det, occ, coast, label
         c = self.config
-        octave = np.round(np.log2(heights(mean))).astype(np.int64)
         cell = np.array([c.merge_position, c.merge_velocity, c.merge_position] * 2)
-        cells = np.floor(mean.reshape(-1, 6) / (cell * np.exp2(octave)[:, None])).astype(
-            np.int64)
-        key = np.concatenate([label[:, None], octave[:, None], cells], axis=1)
+        key = _cell_keys(mean, label, cell)
         # one integer per cell (mixed radix, label first) when it fits: one sort instead of
         # lexsort's eight, the same order
-        low = key.min(axis=0)
-        span = key.max(axis=0) - low + 1
-        if np.log2(span.astype(float)).sum() < 62:
-            radix = np.append(np.cumprod(span[::-1])[::-1][1:], 1)
-            packed = (key - low) @ radix
-            order = np.argsort(packed, kind="stable")
-            packed = packed[order]
-            start = np.ones(len(order), dtype=bool)
-            start[1:] = packed[1:] != packed[:-1]
-        else:
+        fits, order, start = _packed_order(key)
+        if not fits:
             order = np.lexsort(key.T[::-1])
             key = key[order]
             start = np.ones(len(order), dtype=bool)
             start[1:] = (key[1:] != key[:-1]).any(axis=1)
         if start.all():
             return mass, mean, cov, det, occ, coast, label
-        first = np.flatnonzero(start)
-        # a component alone in its cell is its own moment match (share 1, no spread): only
-        # the cells holding several are pooled
-        size = np.diff(np.append(first, len(order)))
-        pooled = size > 1
-        member = np.repeat(pooled, size)
-        sub = order[member]
-        sub_first = np.cumsum(np.append(0, size[pooled][:-1]))
-        group = np.repeat(np.arange(len(sub_first)), size[pooled])
-        m = mass[sub]
-        total = np.add.reduceat(m, sub_first)
-        share = m / total[group]
-        mu = np.add.reduceat(share[:, None, None] * mean[sub], sub_first)
-        dev = mean[sub] - mu[group]
-        spread = cov[sub] + dev[..., :, None] * dev[..., None, :]
-        sigma = np.add.reduceat(share[:, None, None, None] * spread, sub_first)
-        alone = order[first[~pooled]]
-        out = [np.empty((len(first),) + a.shape[1:], dtype=a.dtype)
-               for a in (mass, mean, cov, det, occ, coast)]
-        for arr, mixed, source in zip(out[:3], (total, mu, sigma), (mass, mean, cov), strict=True):
-            arr[pooled], arr[~pooled] = mixed, source[alone]
-        for arr, source in zip(out[3:], (det, occ, coast), strict=True):
-            arr[pooled] = np.add.reduceat(share * source[sub], sub_first)
-            arr[~pooled] = source[alone]
-        return (*out, label[order][first])
+        return _pool_cells(order, start, mass, mean, cov, det, occ, coast, label)
 
     def _cap_existence(self) -> None:
         """Guard against r exceeding 1 by rounding: scale such an object's masses down."""
@@ -719,3 +617,336 @@ class GaussianMixturePMB:
             scale = np.where(over, 1.0 / np.maximum(r, 1e-300), 1.0)
             self.mass[:n][lab] *= scale[self.label[:n][lab]]
 
+
+
+@njit
+def _pool_cells(order, start, mass, mean, cov, det, occ, coast, label):
+    """Moment matching of the runs of `order` that `start` opens (one run a cell): mass
+    W = sum w_k, mean mu = sum s_k m_k and covariance sum s_k (P_k + (m_k - mu)(m_k - mu)')
+    with shares s_k = w_k / W; d, o and the coasting time are share-weighted means. A
+    component alone in its cell comes out unchanged."""
+    G = 0
+    for i in range(len(start)):
+        G += start[i]
+    B, d = mean.shape[1], mean.shape[2]
+    out_mass, out_mean, out_cov = np.zeros(G), np.zeros((G, B, d)), np.zeros((G, B, d, d))
+    out_det, out_occ, out_coast = np.zeros(G), np.zeros(G), np.zeros(G)
+    out_label = np.empty(G, dtype=label.dtype)
+    first = np.empty(G + 1, dtype=np.int64)
+    g = -1
+    for i in range(len(order)):
+        if start[i]:
+            g += 1
+            first[g] = i
+        out_mass[g] += mass[order[i]]
+    first[G] = len(order)
+    for g in range(G):
+        total = out_mass[g]
+        out_label[g] = label[order[first[g]]]
+        for i in range(first[g], first[g + 1]):
+            k = order[i]
+            share = mass[k] / total
+            out_mean[g] += share * mean[k]
+            out_det[g] += share * det[k]
+            out_occ[g] += share * occ[k]
+            out_coast[g] += share * coast[k]
+        for i in range(first[g], first[g + 1]):
+            k = order[i]
+            share = mass[k] / total
+            for b in range(B):
+                for r in range(d):
+                    dev_r = mean[k, b, r] - out_mean[g, b, r]
+                    for c in range(d):
+                        dev_c = mean[k, b, c] - out_mean[g, b, c]
+                        out_cov[g, b, r, c] += share * (cov[k, b, r, c] + dev_r * dev_c)
+    return out_mass, out_mean, out_cov, out_det, out_occ, out_coast, out_label
+
+
+@njit
+def _predict_in_place(mean, cov, coasting, F, Q, F_coast, Q_coast):
+    """m <- F m, P <- F P F' + h^2 Q per component and axis, with h its box height (the
+    unit of the motion noises, `ConstantVelocity.predict`) and (F, Q) the coasting model's
+    for a component whose object was missed."""
+    d = mean.shape[2]
+    m, FP = np.empty(d), np.empty((d, d))
+    for k in range(len(mean)):
+        A, Qk = (F_coast, Q_coast) if coasting[k] else (F, Q)
+        unit2 = max(2.0 * mean[k, 1, 2], MIN_HEIGHT) ** 2
+        for b in range(mean.shape[1]):
+            for r in range(d):
+                m[r] = 0.0
+                for c in range(d):
+                    m[r] += A[r, c] * mean[k, b, c]
+                    FP[r, c] = 0.0
+                    for i in range(d):
+                        FP[r, c] += A[r, i] * cov[k, b, i, c]
+            for r in range(d):
+                mean[k, b, r] = m[r]
+                for c in range(d):
+                    total = 0.0
+                    for i in range(d):
+                        total += FP[r, i] * A[c, i]
+                    cov[k, b, r, c] = total + unit2 * Qk[r, c]
+
+
+@njit
+def _object_moments(label, mass, mean, cov, L):
+    """`GaussianMixturePMB.object_moments` of components with these labels: per slot the
+    existence, the mass-weighted mean state and the centre's standard deviation."""
+    r = np.zeros(L)
+    means = np.zeros((L,) + mean.shape[1:])
+    var = np.zeros((L, 2))
+    for k in range(len(label)):
+        if label[k] >= 0:
+            r[label[k]] += mass[k]
+    for k in range(len(label)):
+        i = label[k]
+        if i >= 0:
+            share = mass[k] / max(r[i], 1e-300)
+            means[i] += share * mean[k]
+    for k in range(len(label)):
+        i = label[k]
+        if i >= 0:
+            share = mass[k] / max(r[i], 1e-300)
+            for a in range(2):
+                var[i, a] += share * (cov[k, a, 0, 0] + (mean[k, a, 0] - means[i, a, 0]) ** 2)
+    return r, means, np.sqrt(var)
+
+
+@njit
+def _object_sums(rows, R, mass, miss, hidden):
+    """Per object row: r = sum w_k, sum w_k miss_k and sum w_k hidden_k."""
+    r, miss_mass, hidden_mass = np.zeros(R), np.zeros(R), np.zeros(R)
+    for k in range(len(rows)):
+        r[rows[k]] += mass[k]
+        miss_mass[rows[k]] += mass[k] * miss[k]
+        hidden_mass[rows[k]] += mass[k] * hidden[k]
+    return r, miss_mass, hidden_mass
+
+
+@njit
+def _child_features(parent, j, det, occ, occ_all, established, v, q, miss, seen_hidden, coast,
+                    dt):
+    """d, o and the coasting time of each child (of component parent[c], by detection j[c],
+    -1 for the miss child), by Bayes. Missed: P(D=1 | miss) = d o (1 - v + v q) / miss and
+    P(O=1 | miss) = o (1 - d + d (1 - v + v q)) / miss. Hit by z_j: D = 1 and
+    P(O=1 | hit) = o v (1 - h_j) / (1 - o + o v (1 - h_j)). `occ` is 0 for the components of
+    objects not confirmed, whose o (`occ_all`) is carried unchanged."""
+    C = len(parent)
+    new_det, new_occ, new_coast = np.empty(C), np.empty(C), np.empty(C)
+    for c in range(C):
+        k = parent[c]
+        d, o, vv, mm = det[k], occ[k], v[k], max(miss[k], 1e-300)
+        hidden_if_occludable = 1.0 - vv + vv * q[k]
+        if j[c] >= 0:
+            new_det[c] = 1.0
+            escaped = vv * (1.0 - seen_hidden[j[c]])
+            seen_o = o * escaped / max(1.0 - o + o * escaped, 1e-300)
+            new_occ[c] = seen_o if established[k] else occ_all[k]
+            new_coast[c] = 0.0
+        else:
+            new_det[c] = d * o * hidden_if_occludable / mm
+            missed_o = o * (1.0 - d + d * hidden_if_occludable) / mm
+            new_occ[c] = missed_o if established[k] else occ_all[k]
+            new_coast[c] = coast[k] + dt
+    return new_det, new_occ, new_coast
+
+
+@njit
+def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass, det,
+               o_seen, v, seen_hidden, pd, use_seen, label, slot_class, classes):
+    """The hit weights l_kj = w_k d_k (1 - o_k + o_k v_k (1 - h_j)) p(z_j | x_k) of the pairs
+    that are possible (l_kj > e^LOG_FLOOR: below, a pair is impossible, and cutting there
+    keeps slow subnormal numbers out; and an object never takes a detection of another
+    class, `classes` empty: one class), summed into the association's weights: L_0j of the
+    Poisson part, and L_ij on the candidate edges (object row, detection) that any pair
+    reaches. Returns the kept pairs (pk, pj, l, edge of each pair, -1 for the Poisson part's),
+    L_0j and the edges (row, column, L_ij)."""
+    P = len(pk)
+    keep = np.zeros(P, dtype=np.bool_)
+    hit = np.empty(P)
+    floor = math.exp(LOG_FLOOR)
+    for e in range(P):
+        k, j = pk[e], pj[e]
+        if use_seen:
+            o = o_seen[k]
+            weight = mass[k] * det[k] * (1.0 - o + o * v[k] * (1.0 - seen_hidden[j]))
+        else:
+            weight = mass[k] * pd[k]
+        value = math.exp(log_hit[e]) * max(weight, 1e-300)
+        if value > floor and (len(classes) == 0 or label[k] < 0
+                              or slot_class[label[k]] == classes[j]):
+            keep[e] = True
+            hit[e] = value
+    poisson_hit = np.zeros(M)
+    L_cand = np.zeros(len(cand_row))
+    for e in range(P):
+        if keep[e]:
+            if rows[pk[e]] < A:
+                L_cand[cand_of_pair[e]] += hit[e]
+            else:
+                poisson_hit[pj[e]] += hit[e]
+    edge_of_cand = np.full(len(cand_row), -1, dtype=np.int64)
+    E = 0
+    for i in range(len(cand_row)):
+        if L_cand[i] > 0:
+            edge_of_cand[i] = E
+            E += 1
+    e_row, e_col, L_edge = (np.empty(E, dtype=np.int64), np.empty(E, dtype=np.int64),
+                            np.empty(E))
+    for i in range(len(cand_row)):
+        if edge_of_cand[i] >= 0:
+            e_row[edge_of_cand[i]] = cand_row[i]
+            e_col[edge_of_cand[i]] = cand_col[i]
+            L_edge[edge_of_cand[i]] = L_cand[i]
+    K = 0
+    for e in range(P):
+        K += keep[e]
+    out_k, out_j = np.empty(K, dtype=np.int64), np.empty(K, dtype=np.int64)
+    out_hit, out_edge = np.empty(K), np.empty(K, dtype=np.int64)
+    i = 0
+    for e in range(P):
+        if keep[e]:
+            out_k[i], out_j[i], out_hit[i] = pk[e], pj[e], hit[e]
+            out_edge[i] = edge_of_cand[cand_of_pair[e]] if rows[pk[e]] < A else -1
+            i += 1
+    return out_k, out_j, out_hit, out_edge, poisson_hit, e_row, e_col, L_edge
+
+
+@njit
+def _relax_in_place(p, stationary, memory):
+    """`TwoStateMarkov.predict`: p <- stationary + memory (p - stationary)."""
+    for k in range(len(p)):
+        p[k] = stationary + memory * (p[k] - stationary)
+
+
+@njit
+def _survive_in_place(mass, mean, image_size, survival_inside, exit_survival):
+    """Masses times the survival of a component whose centre is in the image (and whose box
+    is at least 2 px wide and tall), else times `exit_survival`."""
+    for k in range(len(mass)):
+        inside = True
+        for axis in range(2):
+            centre = mean[k, axis, 0]
+            if not (centre >= 0 and centre <= image_size[axis] and mean[k, axis, 2] >= 1.0):
+                inside = False
+        mass[k] *= survival_inside if inside else exit_survival
+
+
+@njit
+def _move_in_place(mean, cov, scale, shift):
+    """x -> scale x + shift per axis: centres move, velocities and half-sizes scale,
+    covariances scale by scale^2."""
+    for k in range(len(mean)):
+        for axis in range(2):
+            for r in range(mean.shape[2]):
+                mean[k, axis, r] *= scale[axis]
+                for c in range(mean.shape[2]):
+                    cov[k, axis, r, c] *= scale[axis] ** 2
+            mean[k, axis, 0] += shift[axis]
+
+
+@njit
+def _count_sizes(z, observed, stats):
+    """Add the half-sizes of the detections with every edge measured to the running count,
+    sum and sum of squares `stats` (3, 2)."""
+    for j in range(len(z)):
+        full = True
+        for axis in range(2):
+            full = full and observed[j, axis, 0] and observed[j, axis, 1]
+        if full:
+            for axis in range(2):
+                half = 0.5 * (z[j, axis, 1] - z[j, axis, 0])
+                stats[0, axis] += 1.0
+                stats[1, axis] += half
+                stats[2, axis] += half * half
+
+
+@njit
+def _cell_keys(mean, label, cell):
+    """Per component (label, octave, the six cell indices): octave = round(log2 h) of its box
+    height h, cell index = floor(state / (cell width 2^octave))."""
+    n = len(mean)
+    key = np.empty((n, 8), dtype=np.int64)
+    for k in range(n):
+        octave = np.round(np.log2(max(2.0 * mean[k, 1, 2], MIN_HEIGHT)))
+        scale = np.exp2(octave)
+        key[k, 0], key[k, 1] = label[k], np.int64(octave)
+        for axis in range(2):
+            for r in range(3):
+                key[k, 2 + 3 * axis + r] = np.int64(
+                    math.floor(mean[k, axis, r] / (cell[3 * axis + r] * scale)))
+    return key
+
+
+@njit
+def _packed_order(key):
+    """(fits, order, start): the rows of `key` sorted (stable) by packing each into one
+    integer of mixed radix, and where a new key starts; fits is False when the packed
+    integers would not fit in 62 bits."""
+    n, width = key.shape
+    low, span = key[0].copy(), np.ones(width, dtype=np.int64)
+    high = key[0].copy()
+    for k in range(n):
+        for c in range(width):
+            low[c] = min(low[c], key[k, c])
+            high[c] = max(high[c], key[k, c])
+    bits = 0.0
+    for c in range(width):
+        span[c] = high[c] - low[c] + 1
+        bits += math.log2(float(span[c]))
+    if not bits < 62:
+        return False, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.bool_)
+    packed = np.zeros(n, dtype=np.int64)
+    for k in range(n):
+        for c in range(width):
+            packed[k] = packed[k] * span[c] + (key[k, c] - low[c])
+    order = np.argsort(packed, kind="mergesort")
+    start = np.ones(n, dtype=np.bool_)
+    for i in range(1, n):
+        start[i] = packed[order[i]] != packed[order[i - 1]]
+    return True, order, start
+
+
+@njit
+def _trim(mass, label, measurement, cap, L):
+    """`GaussianMixturePMB._trim_objects`: the mask of children kept, masses rescaled in
+    place. An object is a label, or (born this step) the Poisson part's hit children of one
+    measurement, keyed L + j; the Poisson part's miss children (key -1) are not trimmed."""
+    n = len(mass)
+    key = np.empty(n, dtype=np.int64)
+    top = -1
+    for c in range(n):
+        key[c] = label[c] if label[c] >= 0 else (L + measurement[c] if measurement[c] >= 0
+                                                 else -1)
+        top = max(top, key[c])
+    keep = np.ones(n, dtype=np.bool_)
+    counts = np.zeros(top + 2, dtype=np.int64)
+    over = False
+    for c in range(n):
+        if key[c] >= 0:
+            counts[key[c]] += 1
+            over = over or counts[key[c]] > cap
+    if not over:
+        return keep
+    order = np.argsort(key, kind="mergesort")
+    first = 0
+    while first < n:
+        last = first
+        while last < n and key[order[last]] == key[order[first]]:
+            last += 1
+        if key[order[first]] >= 0 and last - first > cap:
+            members = order[first:last]
+            ranked = members[np.argsort(-mass[members], kind="mergesort")]
+            total, kept_total = 0.0, 0.0
+            for rank in range(len(ranked)):
+                total += mass[ranked[rank]]
+                if rank < cap:
+                    kept_total += mass[ranked[rank]]
+                else:
+                    keep[ranked[rank]] = False
+            scale = total / max(kept_total, 1e-300)
+            for c in members:
+                mass[c] *= scale
+        first = last
+    return keep

@@ -32,8 +32,9 @@ def _same_file(a: Path, b: str | os.PathLike) -> bool:
 def check_output(path: str | os.PathLike, overwrite: bool = False,
                  inputs: Iterable[str | os.PathLike | None] = ()) -> Path | None:
     """Refuse an output before any work is done: one of the `inputs` (so writing it would
-    destroy what is being read), a folder, an existing file without `overwrite`, or a missing
-    folder. Returns the path, or None for "-" (standard output)."""
+    destroy what is being read), a folder, an existing file without `overwrite`, a missing
+    folder, or a folder one cannot write in (an OSError naming `path`: no permission, a
+    read-only disk). Returns the path, or None for "-" (standard output)."""
     if str(path) == STDOUT:
         return None
     target = Path(path)
@@ -47,7 +48,27 @@ def check_output(path: str | os.PathLike, overwrite: bool = False,
         raise OcctrackError("exists already; pass --force to overwrite it", str(target))
     if not target.resolve().parent.is_dir():
         raise OcctrackError("folder does not exist", str(target.parent))
+    _probe(target)
     return target
+
+
+def _real(target: Path) -> Path:
+    """Where the bytes go: through a symlink, to the file it names."""
+    return Path(os.path.realpath(target)) if target.is_symlink() else target
+
+
+def _as_output_error(err: OSError, target: str | os.PathLike) -> OSError:
+    """`err` naming the output the user gave rather than a temporary file's name."""
+    return OSError(err.errno, err.strerror, str(target))
+
+
+def _probe(target: Path) -> None:
+    """Create and remove a temporary file beside `target`, so that a folder one cannot write
+    in (permissions, a read-only disk) stops the run before the work, not after it."""
+    try:
+        os.unlink(_temporary(_real(target)))
+    except OSError as err:
+        raise _as_output_error(err, target) from None
 
 
 def _temporary(target: Path) -> Path:
@@ -105,8 +126,11 @@ def atomic_path(path: str | os.PathLike, overwrite: bool = False) -> Iterator[Pa
     checked = check_output(path, overwrite)
     if checked is None:
         raise OcctrackError("cannot write this output to standard output; give a file name")
-    target = Path(os.path.realpath(checked)) if checked.is_symlink() else checked
-    tmp = _temporary(target)
+    target = _real(checked)
+    try:
+        tmp = _temporary(target)
+    except OSError as err:
+        raise _as_output_error(err, path) from None
     try:
         yield tmp
         _fsync(tmp)
@@ -115,7 +139,7 @@ def atomic_path(path: str | os.PathLike, overwrite: bool = False) -> Iterator[Pa
         with suppress(OSError):
             tmp.unlink()
         if err.filename in (None, str(tmp)):
-            raise OSError(err.errno, err.strerror, str(path)) from err
+            raise _as_output_error(err, path) from err
         raise
     except BaseException:
         with suppress(OSError):

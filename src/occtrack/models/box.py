@@ -22,10 +22,13 @@ z[:, axis, 1] the high edge, axis 0 horizontal and 1 vertical.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.special import log_ndtr
 
 from occtrack.densities import gaussian
+from occtrack.jit import njit
 
 H_EDGES = np.array([[1.0, 0.0, -1.0], [1.0, 0.0, 1.0]])
 MIN_HEIGHT = 4.0  # px: the scale of a degenerate box
@@ -108,9 +111,9 @@ class BoxMeasurement:
 
     def innovation(self, means: np.ndarray,
                    covs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Predicted edges zhat (K, 2, 2) and innovation covariances S (K, 2, 2, 2)."""
-        zhat, S, _ = gaussian.innovation(means, covs, self.H, self.R(means))
-        return zhat, S
+        """Predicted edges zhat (K, 2, 2) and innovation covariances S (K, 2, 2, 2):
+        `gaussian.innovation` for this H, written out (`_innovation`)."""
+        return _innovation(means, covs, self.edge_noise)
 
     @staticmethod
     def gates(zhat: np.ndarray, S: np.ndarray, sigmas: float) -> np.ndarray:
@@ -130,86 +133,121 @@ class BoxMeasurement:
                      observed: np.ndarray, k: np.ndarray, j: np.ndarray) -> np.ndarray:
         """log p(z_j | component k) of the pairs (k[e], j[e]) only, censored edges included:
         the numbers `loglik` gives for those pairs."""
-        a, b, c = S[..., 0, 0], S[..., 0, 1], S[..., 1, 1]  # (K, 2): per component and axis
-        det = a * c - b * b
-        out = np.empty(len(k))
-        full = observed.all(axis=(1, 2))
-        e = np.arange(len(k)) if full.all() else np.flatnonzero(full[j])
-        if len(e):  # detections with every edge measured: S^-1 in closed form, per axis
-            ke, je = (k, j) if len(e) == len(k) else (k[e], j[e])
-            total = 0.0
-            for axis in range(2):
-                inv = 1.0 / det[:, axis]
-                r0 = z[je, axis, 0] - zhat[ke, axis, 0]
-                r1 = z[je, axis, 1] - zhat[ke, axis, 1]
-                total = total + ((c[:, axis] * inv)[ke] * r0 * r0
-                                 - (2.0 * b[:, axis] * inv)[ke] * r0 * r1
-                                 + (a[:, axis] * inv)[ke] * r1 * r1)
-            out[e] = -0.5 * (total + (np.log(det).sum(axis=1) + 4.0 * gaussian.LOG_2PI)[ke])
-        if len(e) == len(k):
-            return out
-        e = np.flatnonzero(~full[j])  # the pairs of detections with an edge on the border
-        k, j = k[e], j[e]
-        r = z[j] - zhat[k]  # (P, 2, 2)
-        obs = observed[j]  # (P, 2, 2)
-        o0, o1 = obs[..., 0], obs[..., 1]
-        r0, r1 = np.where(o0, r[..., 0], 0.0), np.where(o1, r[..., 1], 0.0)
-        ak, bk, ck, dk = a[k], b[k], c[k], det[k]
-        both = o0 & o1
-        quad = np.where(both, (ck * r0 * r0 - 2.0 * bk * r0 * r1 + ak * r1 * r1) / dk,
-                        r0 * r0 / ak + r1 * r1 / ck)
-        logdet = np.where(both, np.log(dk) + 2.0 * gaussian.LOG_2PI,
-                          o0 * (np.log(ak) + gaussian.LOG_2PI)
-                          + o1 * (np.log(ck) + gaussian.LOG_2PI))
-        out[e] = -0.5 * (quad + logdet).sum(axis=1)
-        # log P(edge beyond the border) of the components concerned, as in `loglik`
-        needed = np.zeros(len(zhat), dtype=bool)
-        needed[k] = True
-        comps = np.flatnonzero(needed)
-        place = np.zeros(len(zhat), dtype=np.int64)
-        place[comps] = np.arange(len(comps))
-        sd = np.sqrt(np.stack([a[comps], c[comps]], axis=-1))  # (C, 2, 2) edge std
-        border = np.stack([np.full(2, self.border_margin),
-                           self.image_size - self.border_margin], axis=-1)
-        sign = np.array([1.0, -1.0])
-        log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means[comps]) ** 2)
-        beyond = log_ndtr(sign * (border - zhat[comps]) / sd) + log_peak[:, None, None]
-        out[e] += np.where(~obs, beyond[place[k]], 0.0).sum(axis=(1, 2))
-        return out
+        if observed.all():
+            beyond = np.zeros((0, 2, 2))
+        else:  # log P(edge beyond the border) of every component, as in `loglik`
+            sd = np.sqrt(np.stack([S[..., 0, 0], S[..., 1, 1]], axis=-1))  # (K, 2, 2)
+            border = np.stack([np.full(2, self.border_margin),
+                               self.image_size - self.border_margin], axis=-1)
+            log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
+            beyond = log_ndtr(np.array([1.0, -1.0]) * (border - zhat) / sd) + log_peak[
+                :, None, None]
+        return _loglik_pairs(zhat, S, z, observed, np.asarray(k, dtype=np.int64),
+                             np.asarray(j, dtype=np.int64), beyond)
 
     def update(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                observed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Kalman update of aligned (component, measurement) pairs with the measured edges:
-        `gaussian.update` (Joseph form) written out for this H, element by element, which
-        spares thousands of tiny matrix products in a crowd. With u = P h0', w = P h1' (h0,
-        h1 the measured edge rows, zero when not measured), S the innovation covariance and
-        gains g0, g1 (the columns of P H' S^-1), the Joseph form
-        (I - G H) P (I - G H)' + G R G' expands to
-        P - g0 u' - u g0' - g1 w' - w g1' + S00 g0 g0' + S01 (g0 g1' + g1 g0') + S11 g1 g1'."""
-        m0 = observed[..., 0].astype(float)  # (n, 2): low edge measured, per axis
-        m1 = observed[..., 1].astype(float)
-        var = (self.noise_std(means) ** 2)[:, None]
-        P = [[covs[..., a, b] for b in range(3)] for a in range(3)]  # (n, 2) each
-        # P h0' and P h1' (h0 = [1, 0, -1], h1 = [1, 0, 1]), masked
-        u = [(P[a][0] - P[a][2]) * m0 for a in range(3)]
-        w = [(P[a][0] + P[a][2]) * m1 for a in range(3)]
-        s00 = m0 * (P[0][0] - 2.0 * P[0][2] + P[2][2] + var) + (1.0 - m0)
-        s11 = m1 * (P[0][0] + 2.0 * P[0][2] + P[2][2] + var) + (1.0 - m1)
-        s01 = m0 * m1 * (P[0][0] - P[2][2])
-        det = s00 * s11 - s01 * s01
-        g0 = [(u[a] * s11 - w[a] * s01) / det for a in range(3)]
-        g1 = [(w[a] * s00 - u[a] * s01) / det for a in range(3)]
-        # S00 g0 g0' + S01 (g0 g1' + g1 g0') + S11 g1 g1' = g0 h0' + g1 h1'
-        h0 = [g0[a] * s00 + g1[a] * s01 for a in range(3)]
-        h1 = [g0[a] * s01 + g1[a] * s11 for a in range(3)]
-        r0 = (z[..., 0] - means[..., 0] + means[..., 2]) * m0
-        r1 = (z[..., 1] - means[..., 0] - means[..., 2]) * m1
+        `gaussian.update` (Joseph form) written out for this H, element by element (see
+        `_update_pairs`)."""
         new_means = np.empty_like(means)
         new_covs = np.empty_like(covs)
-        for a in range(3):
-            new_means[..., a] = means[..., a] + g0[a] * r0 + g1[a] * r1
-            for b in range(a, 3):
-                new_covs[..., a, b] = (P[a][b] - g0[a] * u[b] - u[a] * g0[b] - g1[a] * w[b]
-                                       - w[a] * g1[b] + g0[a] * h0[b] + g1[a] * h1[b])
-                new_covs[..., b, a] = new_covs[..., a, b]
+        _update_pairs(means, covs, z, observed, self.edge_noise, new_means, new_covs)
         return new_means, new_covs
+
+
+@njit
+def _loglik_pairs(zhat, S, z, observed, k, j, beyond):
+    """log N of the measured edges of z_j under component k, per pair, plus the log
+    probability `beyond` (K, 2, 2) of each edge on the border; S^-1 and the log-determinants
+    in closed form per component and axis, once."""
+    K = len(zhat)
+    log_det, log_a, log_c = np.empty((K, 2)), np.empty((K, 2)), np.empty((K, 2))
+    for i in range(K):
+        for axis in range(2):
+            a, b, c = S[i, axis, 0, 0], S[i, axis, 0, 1], S[i, axis, 1, 1]
+            log_det[i, axis] = math.log(a * c - b * b) + 2.0 * gaussian.LOG_2PI
+            log_a[i, axis] = math.log(a) + gaussian.LOG_2PI
+            log_c[i, axis] = math.log(c) + gaussian.LOG_2PI
+    out = np.empty(len(k))
+    for e in range(len(k)):
+        ke, je = k[e], j[e]
+        total = 0.0
+        for axis in range(2):
+            a, b, c = S[ke, axis, 0, 0], S[ke, axis, 0, 1], S[ke, axis, 1, 1]
+            o0, o1 = observed[je, axis, 0], observed[je, axis, 1]
+            r0 = z[je, axis, 0] - zhat[ke, axis, 0]
+            r1 = z[je, axis, 1] - zhat[ke, axis, 1]
+            if o0 and o1:
+                total += (c * r0 * r0 - 2.0 * b * r0 * r1 + a * r1 * r1) / (a * c - b * b) + (
+                    log_det[ke, axis])
+                continue
+            if o0:
+                total += r0 * r0 / a + log_a[ke, axis]
+            else:
+                total -= 2.0 * beyond[ke, axis, 0]
+            if o1:
+                total += r1 * r1 / c + log_c[ke, axis]
+            else:
+                total -= 2.0 * beyond[ke, axis, 1]
+        out[e] = -0.5 * total
+    return out
+
+
+@njit
+def _update_pairs(means, covs, z, observed, edge_noise, new_means, new_covs):
+    """Kalman update of pair i (component i, measurement z_i), per axis. With u = P h0',
+    w = P h1' (h0 = [1, 0, -1], h1 = [1, 0, 1] the edge rows, zero when the edge is not
+    measured), S the innovation covariance and gains g0, g1 (the columns of P H' S^-1), the
+    Joseph form (I - G H) P (I - G H)' + G R G' expands to
+    P - g0 u' - u g0' - g1 w' - w g1' + g0 h0' + g1 h1',  h0 = S00 g0 + S01 g1,
+    h1 = S01 g0 + S11 g1, which spares thousands of tiny matrix products in a crowd."""
+    u, w, g0, g1, h0, h1 = (np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3),
+                            np.empty(3))
+    for i in range(len(means)):
+        var = (edge_noise * max(2.0 * means[i, 1, 2], MIN_HEIGHT)) ** 2
+        for axis in range(2):
+            P = covs[i, axis]
+            m0 = 1.0 if observed[i, axis, 0] else 0.0
+            m1 = 1.0 if observed[i, axis, 1] else 0.0
+            for a in range(3):
+                u[a] = (P[a, 0] - P[a, 2]) * m0
+                w[a] = (P[a, 0] + P[a, 2]) * m1
+            s00 = m0 * (P[0, 0] - 2.0 * P[0, 2] + P[2, 2] + var) + (1.0 - m0)
+            s11 = m1 * (P[0, 0] + 2.0 * P[0, 2] + P[2, 2] + var) + (1.0 - m1)
+            s01 = m0 * m1 * (P[0, 0] - P[2, 2])
+            det = s00 * s11 - s01 * s01
+            for a in range(3):
+                g0[a] = (u[a] * s11 - w[a] * s01) / det
+                g1[a] = (w[a] * s00 - u[a] * s01) / det
+                h0[a] = g0[a] * s00 + g1[a] * s01
+                h1[a] = g0[a] * s01 + g1[a] * s11
+            m = means[i, axis]
+            r0 = (z[i, axis, 0] - m[0] + m[2]) * m0
+            r1 = (z[i, axis, 1] - m[0] - m[2]) * m1
+            for a in range(3):
+                new_means[i, axis, a] = m[a] + g0[a] * r0 + g1[a] * r1
+                for b in range(a, 3):
+                    value = (P[a, b] - g0[a] * u[b] - u[a] * g0[b] - g1[a] * w[b]
+                             - w[a] * g1[b] + g0[a] * h0[b] + g1[a] * h1[b])
+                    new_covs[i, axis, a, b] = value
+                    new_covs[i, axis, b, a] = value
+
+
+@njit
+def _innovation(means, covs, edge_noise):
+    """zhat = H m and S = H P H' + R per component and axis, with H = [[1, 0, -1], [1, 0, 1]]
+    (low edge c - s, high edge c + s) and R = (e h_k)^2 I."""
+    K = len(means)
+    zhat, S = np.empty((K, 2, 2)), np.empty((K, 2, 2, 2))
+    for k in range(K):
+        var = (edge_noise * max(2.0 * means[k, 1, 2], MIN_HEIGHT)) ** 2
+        for axis in range(2):
+            m, P = means[k, axis], covs[k, axis]
+            zhat[k, axis, 0] = m[0] - m[2]
+            zhat[k, axis, 1] = m[0] + m[2]
+            S[k, axis, 0, 0] = P[0, 0] - P[0, 2] - P[2, 0] + P[2, 2] + var
+            S[k, axis, 1, 1] = P[0, 0] + P[0, 2] + P[2, 0] + P[2, 2] + var
+            S[k, axis, 0, 1] = P[0, 0] + P[0, 2] - P[2, 0] - P[2, 2]
+            S[k, axis, 1, 0] = P[0, 0] - P[0, 2] + P[2, 0] - P[2, 2]
+    return zhat, S

@@ -9,7 +9,10 @@ not 0; every row of a file without a class column) is a hit, one matched to a di
 and the others are false. From that:
 
 - detection probability P_D against the ground truth's visibility and box height, in bins and
-  jointly; the stationary detectability of visible people (visibility >= `VISIBLE`), and the
+  jointly; the stationary detectability of visible people (visibility >= `VISIBLE`: what an
+  occlusion model needs, as it explains the misses behind others), that of tracked people
+  (P(hit | the person was detected within the last `horizon` seconds, the tracker's
+  `report_coast_time`: what `occlusion = none` needs, see `Calibration.settings`), and the
   lag-one memory of detection along each person's frames, which fixes the tracker's
   `detectability_ratio` (the Markov feature of `occtrack.models.markov`: for a two-state chain
   P(hit | hit) - P(hit | miss) is the memory per step, lambda = (1 - h) ** (dt / 0.5));
@@ -47,6 +50,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2, norm
 from scipy.stats import t as student_t
 
+from occtrack.config import TrackerConfig
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
 from occtrack.spatial import iou
@@ -110,6 +114,8 @@ class Calibration:
     set_aside: int
     detection_overall: Estimate
     detectability: Estimate
+    detection_tracked: Estimate  # P(hit | detected within the last `horizon` s)
+    horizon: float
     detection_memory: Estimate
     detectability_ratio: Estimate
     by_visibility: list[tuple[float, float, Estimate]]
@@ -129,9 +135,14 @@ class Calibration:
 
     def settings(self, occlusion: bool = True) -> dict:
         """The TrackerConfig fields this calibration sets. With `occlusion` (an occlusion
-        model explains misses behind others) the detectability is that of visible people,
-        else that of every person."""
-        detect = self.detectability if occlusion else self.detection_overall
+        model explains misses behind others) the detectability is that of visible people.
+        Without, it is that of tracked people, not of every person: the tracker's P_D only
+        weighs the misses of the objects it holds, and it holds a person from a detection
+        until `horizon` (its report_coast_time) of misses; the people it never detected, or
+        lost long ago (deep in an occlusion), are misses it never scores, and counting them
+        (P_D 0.55 on MOT17-04) makes each miss nearly free, so tracks of people who left or
+        went out of sight coast on as false boxes."""
+        detect = self.detectability if occlusion else self.detection_tracked
         out = {}
         if not math.isnan(detect.value):
             out["detectability"] = _clip(detect.value, 0.01, 0.999)
@@ -286,13 +297,16 @@ def _bins(values: np.ndarray, edges) -> np.ndarray:
     return np.clip(idx, 0, len(edges) - 2)
 
 
-def calibrate(sequences: list[Labelled], seed: int = 0) -> Calibration:
-    """Estimate the detector model from labelled sequences (see the module docstring)."""
+def calibrate(sequences: list[Labelled], seed: int = 0,
+              horizon: float = TrackerConfig.report_coast_time) -> Calibration:
+    """Estimate the detector model from labelled sequences (see the module docstring);
+    `horizon`: seconds after a person's last detection in which the tracker still holds
+    them (the population of `detection_tracked`)."""
     if not sequences:
         raise OcctrackError("calibration needs at least one pair of ground truth and detections")
     rng = np.random.default_rng(seed)
     # per target row: cluster (person), visibility, height, hit; consecutive pairs; edges
-    t_cluster, t_vis, t_h, t_hit = [], [], [], []
+    t_cluster, t_vis, t_h, t_hit, t_recent = [], [], [], [], []
     pair_cluster, pair_prev, pair_now, pair_half = [], [], [], []
     e_cluster, e_err, e_h, e_size, e_valid = [], [], [], [], []
     f_block, f_bin, f_kind, block_frames = [], [], [], []
@@ -326,6 +340,10 @@ def calibrate(sequences: list[Labelled], seed: int = 0) -> Calibration:
         # consecutive frames of one person, both visible: the memory of detection
         order = np.lexsort((gt.frame[rows], cluster))
         c_o, f_o, v_o, h_o = cluster[order], gt.frame[rows][order], vis[order], hit[order]
+        recent = np.empty(len(rows), dtype=bool)
+        recent[order] = _recently_detected(c_o, f_o, h_o,
+                                           max(1, int(round(horizon * seq.fps))))
+        t_recent.append(recent)
         nxt = (c_o[1:] == c_o[:-1]) & (f_o[1:] == f_o[:-1] + 1) & (v_o[1:] >= VISIBLE) & (
             v_o[:-1] >= VISIBLE)
         pair_cluster.append(c_o[1:][nxt] + n_clusters)
@@ -362,6 +380,7 @@ def calibrate(sequences: list[Labelled], seed: int = 0) -> Calibration:
 
     cat = np.concatenate
     t_cluster, t_vis, t_h, t_hit = cat(t_cluster), cat(t_vis), cat(t_h), cat(t_hit)
+    t_recent = cat(t_recent)
     targets = len(t_hit)
     if targets == 0:
         raise OcctrackError("the ground truth holds no pedestrian to calibrate against "
@@ -380,9 +399,10 @@ def calibrate(sequences: list[Labelled], seed: int = 0) -> Calibration:
     nv, nh = len(VISIBILITY_BINS) - 1, len(HEIGHT_BINS) - 1
     columns = ([np.ones(targets, dtype=bool), t_vis >= VISIBLE]
                + [vb == i for i in range(nv)] + [hb == j for j in range(nh)]
-               + [(vb == i) & (hb == j) for i in range(nv) for j in range(nh)])
+               + [(vb == i) & (hb == j) for i in range(nv) for j in range(nh)]
+               + [t_recent])
     est = proportion(*per_cluster(columns), weights)
-    overall, visible = est[0], est[1]
+    overall, visible, tracked = est[0], est[1], est[-1]
     by_vis = [(VISIBILITY_BINS[i], VISIBILITY_BINS[i + 1], est[2 + i]) for i in range(nv)]
     by_h = [(HEIGHT_BINS[j], HEIGHT_BINS[j + 1], est[2 + nv + j]) for j in range(nh)]
     joint = [[est[2 + nv + nh + i * nh + j] for j in range(nh)] for i in range(nv)]
@@ -415,10 +435,24 @@ def calibrate(sequences: list[Labelled], seed: int = 0) -> Calibration:
     return Calibration(
         sequences=[s.name for s in sequences], frames=frames, targets=targets,
         detections=detections, hits=hits, false=false, set_aside=aside,
-        detection_overall=overall, detectability=visible, detection_memory=memory,
+        detection_overall=overall, detectability=visible, detection_tracked=tracked,
+        horizon=float(horizon), detection_memory=memory,
         detectability_ratio=ratio, by_visibility=by_vis, by_height=by_h, joint=joint,
         false_per_frame=rates[nb], by_score=by_score, size_area=size_area,
         clutter_rate=clutter_rate, clutter_score_power=power, notes=notes, **edge)
+
+
+def _recently_detected(cluster, frame, hit, frames: int) -> np.ndarray:
+    """Per row of one person's rows sorted by (person, frame): was the person detected in one
+    of the `frames` frames before this one?"""
+    if len(frame) == 0:
+        return np.zeros(0, dtype=bool)
+    span = int(frame.max()) + 2
+    # a running maximum of person * span + frame of each hit (0 for a miss) stays within the
+    # person's own rows, as the rows are sorted by person and frames are >= 1
+    running = np.maximum.accumulate(cluster * span + np.where(hit, frame, 0))
+    last = np.concatenate([[-1], running[:-1]]) - cluster * span
+    return (last >= 1) & (frame - last <= frames)
 
 
 def _memory(cluster, prev, now, half_steps, weights) -> tuple[Estimate, Estimate]:
@@ -603,6 +637,8 @@ def report_lines(cal: Calibration) -> list[str]:
              "",
              f"detection probability, all pedestrians: {cal.detection_overall.text()}",
              f"  visible (visibility >= {VISIBLE}): {cal.detectability.text()}",
+             f"  tracked (detected within the last {cal.horizon:g} s): "
+             f"{cal.detection_tracked.text()}",
              f"  memory per frame P(hit|hit) - P(hit|miss), visible: "
              f"{cal.detection_memory.text()}; half-second ratio "
              f"{cal.detectability_ratio.text()}",
@@ -648,13 +684,14 @@ def to_toml(cal: Calibration, occlusion: bool = True, command: str = "") -> str:
     """A TrackerConfig file (loads with `occtrack track --config`): the settings this
     calibration sets, each with its interval in a comment, and the whole report as comments."""
     settings = cal.settings(occlusion)
-    source = {"detectability": cal.detectability if occlusion else cal.detection_overall,
+    source = {"detectability": cal.detectability if occlusion else cal.detection_tracked,
               "detectability_ratio": cal.detectability_ratio,
               "clutter_rate": cal.clutter_rate,
               "clutter_score_power": cal.clutter_score_power, "edge_noise": cal.edge_noise}
     meaning = {
         "detectability": ("P_D of visible people (visibility >= 0.75), for occlusion models"
-                          if occlusion else "P_D of every pedestrian, for occlusion = none"),
+                          if occlusion else f"P_D of tracked pedestrians (detected within "
+                          f"the last {cal.horizon:g} s), for occlusion = none"),
         "detectability_ratio": "half-second ratio of the detectability chain",
         "clutter_rate": "kappa W H w h at score 1: false boxes per frame per unit of log w x "
                         "log h, over the hits' score density",

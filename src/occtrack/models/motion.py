@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -38,14 +39,14 @@ class ConstantVelocity:
         if not self.velocity_time > 0:
             raise ValueError(f"velocity_time must be positive, not {self.velocity_time}")
 
-    @property
+    @cached_property
     def F(self) -> np.ndarray:
         tau = self.velocity_time
         travel = self.dt if math.isinf(tau) else -tau * math.expm1(-self.dt / tau)
         return np.array([[1.0, travel, 0.0], [0.0, math.exp(-self.dt / tau), 0.0],
                          [0.0, 0.0, 1.0]])
 
-    @property
+    @cached_property
     def Q(self) -> np.ndarray:
         tau = self.velocity_time
         spread = self.dt if math.isinf(tau) else -tau * math.expm1(-2.0 * self.dt / tau) / 2.0

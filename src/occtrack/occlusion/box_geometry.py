@@ -19,10 +19,12 @@ cost that follows the overlaps rather than K N.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from occtrack.jit import njit
 from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
 
 
@@ -40,18 +42,8 @@ class BoxOcclusionGeometry:
 
     def __call__(self, hidden: np.ndarray, occluders: np.ndarray) -> np.ndarray:
         """p[k, n]: probability that box `hidden[k]` is hidden by box `occluders[n]`."""
-        return self._pairwise(hidden[:, None], occluders[None, :])
-
-    def _pairwise(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """p of hidden boxes a and occluders b, broadcast against each other."""
-        overlap = np.minimum(a[..., 1], b[..., 1]) - np.maximum(a[..., 0], b[..., 0])
-        np.maximum(overlap, 0.0, out=overlap)
-        size_a = np.maximum(a[..., 1] - a[..., 0], 1e-9)
-        cover = overlap[..., 0] * overlap[..., 1] / (size_a[..., 0] * size_a[..., 1])
-        height_b = np.maximum(b[..., 1, 1] - b[..., 1, 0], 1e-9)
-        gap = (b[..., 1, 1] - a[..., 1, 1]) / height_b
-        order = (gap - self.ramp_zero) / (self.ramp_one - self.ramp_zero)
-        return np.clip(self.gain * cover, 0.0, 1.0) * np.clip(order, 0.0, 1.0)
+        return _table(np.asarray(hidden, dtype=float), np.asarray(occluders, dtype=float),
+                      self.gain, self.ramp_zero, self.ramp_one)
 
     def visible(self, hidden: np.ndarray, occluders: np.ndarray,
                 weights: np.ndarray | None = None, skip: np.ndarray | None = None,
@@ -60,23 +52,62 @@ class BoxOcclusionGeometry:
         hides it, occluder n counting with weight w_n (1 when None) and never the occluder
         skip[k] (-1: none). `sparse` False computes the full table."""
         K, N = len(hidden), len(occluders)
+        w = np.ones(N) if weights is None else np.asarray(weights, dtype=float)
+        never = np.full(K, -1, dtype=np.int64) if skip is None else np.asarray(skip, np.int64)
+        hidden = np.asarray(hidden, dtype=float)
+        occluders = np.asarray(occluders, dtype=float)
         if not sparse or K * N <= DENSE_PAIRS:
-            p = self(hidden, occluders)
-            if weights is not None:
-                p = p * weights
-            if skip is not None:
-                p[skip[:, None] == np.arange(N)[None, :]] = 0.0
-            return np.prod(1.0 - p, axis=-1)
+            return _visible_dense(hidden, occluders, w, never, self.gain, self.ramp_zero,
+                                  self.ramp_one)
         k, n = overlapping_pairs(hidden, occluders)
-        if skip is not None:
-            keep = skip[k] != n
-            k, n = k[keep], n[keep]
-        p = self._pairwise(hidden[k], occluders[n])
-        if weights is not None:
-            p = p * weights[n]
-        with np.errstate(divide="ignore"):
-            log_visible = np.bincount(k, weights=np.log1p(-np.minimum(p, 1.0)), minlength=K)
-        return np.exp(log_visible)
+        return _visible_pairs(hidden, occluders, k, n, w, never, self.gain, self.ramp_zero,
+                              self.ramp_one)
+
+
+@njit
+def _hides(a, b, gain, ramp_zero, ramp_one):
+    """p(box a hidden by box b): the formula at the top of this module."""
+    cover = 1.0
+    for axis in range(2):
+        overlap = max(min(a[axis, 1], b[axis, 1]) - max(a[axis, 0], b[axis, 0]), 0.0)
+        cover *= overlap / max(a[axis, 1] - a[axis, 0], 1e-9)
+    gap = (b[1, 1] - a[1, 1]) / max(b[1, 1] - b[1, 0], 1e-9)
+    order = (gap - ramp_zero) / (ramp_one - ramp_zero)
+    return min(max(gain * cover, 0.0), 1.0) * min(max(order, 0.0), 1.0)
+
+
+@njit
+def _table(hidden, occluders, gain, ramp_zero, ramp_one):
+    """p[k, n] for every pair."""
+    out = np.empty((len(hidden), len(occluders)))
+    for k in range(len(hidden)):
+        for n in range(len(occluders)):
+            out[k, n] = _hides(hidden[k], occluders[n], gain, ramp_zero, ramp_one)
+    return out
+
+
+@njit
+def _visible_dense(hidden, occluders, weights, skip, gain, ramp_zero, ramp_one):
+    """prod_n (1 - w_n p[k, n]) over every occluder n but skip[k]."""
+    out = np.ones(len(hidden))
+    for k in range(len(hidden)):
+        for n in range(len(occluders)):
+            if n != skip[k]:
+                out[k] *= 1.0 - weights[n] * _hides(hidden[k], occluders[n], gain, ramp_zero,
+                                                    ramp_one)
+    return out
+
+
+@njit
+def _visible_pairs(hidden, occluders, k, n, weights, skip, gain, ramp_zero, ramp_one):
+    """The same product over the listed (k, n) pairs only (the others have p = 0), summed
+    as logarithms."""
+    log_visible = np.zeros(len(hidden))
+    for e in range(len(k)):
+        if n[e] != skip[k[e]]:
+            p = weights[n[e]] * _hides(hidden[k[e]], occluders[n[e]], gain, ramp_zero, ramp_one)
+            log_visible[k[e]] += math.log1p(-min(p, 1.0)) if p < 1.0 else -math.inf
+    return np.exp(log_visible)
 
 
 def combine(p: np.ndarray) -> np.ndarray:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from occtrack.io.atomic import atomic_write
 from occtrack.io.mot import MotTable, read_mot, read_seqinfo
 
 VARIANTS = ("640x360", "15fps", "10fps", "pan")
@@ -52,7 +53,7 @@ def panned(table: MotTable, fps: float, image_size: tuple[float, float],
 def _write(path: Path, table: MotTable) -> None:
     order = np.lexsort((table.id, table.frame))
     path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", encoding="utf-8") as fh:
+    with atomic_write(path, overwrite=True) as fh:
         for i in order:
             l, t, w, h = table.box[i]
             fh.write(f"{table.frame[i]},{table.id[i]},{l:.3f},{t:.3f},{w:.3f},{h:.3f},"
@@ -82,7 +83,7 @@ def write_variant(sequence: str | Path, variant: str, out_root: str | Path) -> P
     folder = Path(out_root) / f"{info['name']}-{variant}"
     _write(folder / "det" / "det.txt", det)
     _write(folder / "gt" / "gt.txt", gt)
-    (folder / "seqinfo.ini").write_text(
-        f"[Sequence]\nname={folder.name}\nframeRate={fps:g}\nseqLength={length}\n"
-        f"imWidth={round(width)}\nimHeight={round(height)}\n", encoding="utf-8")
+    with atomic_write(folder / "seqinfo.ini", overwrite=True) as fh:
+        fh.write(f"[Sequence]\nname={folder.name}\nframeRate={fps:g}\nseqLength={length}\n"
+                 f"imWidth={round(width)}\nimHeight={round(height)}\n")
     return folder

@@ -26,12 +26,14 @@ that overlap: `occtrack.spatial`) and returns exactly the same estimate.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from occtrack.spatial import iou, overlapping_pairs
+from occtrack.jit import njit
+from occtrack.spatial import overlapping_pairs
 
 DENSE_PAIRS = 4096  # more box pairs than this: the sparse form (faster from here on)
-DENSE_VOTES = 64  # more candidates than this: votes counted by a sweep, not a C x C table
 
 
 def _centres(boxes: np.ndarray) -> np.ndarray:
@@ -41,22 +43,6 @@ def _centres(boxes: np.ndarray) -> np.ndarray:
 def _edges(boxes: np.ndarray) -> np.ndarray:
     """(N, 4) left, top, width, height -> (N, 2, 2) edges."""
     return np.stack([boxes[:, :2], boxes[:, :2] + boxes[:, 2:]], axis=-1)
-
-
-def _median(values: np.ndarray) -> np.ndarray:
-    """np.median(values, axis=0), the same numbers, without its overhead."""
-    ordered = np.sort(values, axis=0)
-    half = len(ordered) // 2
-    if len(ordered) % 2:
-        return ordered[half]
-    return (ordered[half - 1] + ordered[half]) / 2.0
-
-
-def _mode(candidates: np.ndarray, votes: np.ndarray) -> np.ndarray:
-    """The candidate shift with the most votes; ties go to the smallest shift, then the lowest
-    (dx, dy), so that the order of the boxes, which is no information, does not matter."""
-    tied = candidates[votes == votes.max()]
-    return tied[np.lexsort((tied[:, 1], tied[:, 0], np.abs(tied).sum(axis=1)))[0]]
 
 
 def _first_best(group: np.ndarray, value: np.ndarray, other: np.ndarray,
@@ -85,33 +71,58 @@ def estimate_shift(previous: np.ndarray, current: np.ndarray, height_ratio: floa
     if len(previous) * len(current) > DENSE_PAIRS:
         return _estimate_sparse(previous, current, height_ratio, mode_radius, min_iou,
                                 min_pairs)
-    hp, hc = previous[:, 3], current[:, 3]
-    scale = np.sqrt(hp[:, None] * hc[None, :])
-    ratio = hc[None, :] / np.maximum(hp[:, None], 1e-9)
-    shift = _centres(current)[None, :, :] - _centres(previous)[:, None, :]
-    near = (ratio < height_ratio) & (ratio > 1.0 / height_ratio) & (
-        np.abs(shift).max(axis=-1) < scale)
-    if near.sum() < min_pairs:
-        return None
-    candidates = shift[near]
-    unit = scale[near]
-    if len(candidates) > DENSE_VOTES:
-        votes = _votes(candidates, mode_radius * unit)
-    else:
-        gap = np.abs(candidates[:, None, :] - candidates[None, :, :]).max(axis=-1)
-        votes = (gap < mode_radius * np.minimum(unit[:, None], unit[None, :])).sum(axis=1)
-    mode = _mode(candidates, votes)
-    moved = previous.copy()
-    moved[:, :2] += mode
-    overlap = iou(moved, current)
-    best_cur = overlap.argmax(axis=1)
-    best_prev = overlap.argmax(axis=0)
-    mutual = (best_prev[best_cur] == np.arange(len(previous))) & (
-        overlap[np.arange(len(previous)), best_cur] > min_iou)
-    if mutual.sum() < min_pairs:
-        return None
-    i = np.flatnonzero(mutual)
-    return _median(shift[i, best_cur[i]])
+    found, shift = _estimate_dense(np.asarray(previous, dtype=float),
+                                   np.asarray(current, dtype=float), height_ratio, mode_radius,
+                                   min_iou, min_pairs)
+    return shift if found else None
+
+
+@njit
+def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_pairs):
+    """Steps 1-3 over every pair of boxes: (found, shift)."""
+    N, M = len(previous), len(current)
+    cp = previous[:, :2] + previous[:, 2:] / 2.0
+    cc = current[:, :2] + current[:, 2:] / 2.0
+    candidates, unit = np.empty((N * M, 2)), np.empty(N * M)
+    C = 0
+    for i in range(N):  # 1. candidates, in the order previous, then current
+        for j in range(M):
+            scale = math.sqrt(previous[i, 3] * current[j, 3])
+            ratio = current[j, 3] / max(previous[i, 3], 1e-9)
+            dx, dy = cc[j, 0] - cp[i, 0], cc[j, 1] - cp[i, 1]
+            if (ratio < height_ratio and ratio > 1.0 / height_ratio
+                    and max(abs(dx), abs(dy)) < scale):
+                candidates[C, 0], candidates[C, 1], unit[C] = dx, dy, scale
+                C += 1
+    if C < min_pairs:
+        return False, np.zeros(2)
+    mode = _mode_shift(candidates[:C], mode_radius * unit[:C])  # 2. the mode
+    moved = previous.copy()  # 3. mutual best IoU after the mode, and the median
+    moved[:, 0] += mode[0]
+    moved[:, 1] += mode[1]
+    overlap = np.zeros((N, M))
+    for i in range(N):
+        for j in range(M):
+            iw = max(min(moved[i, 0] + moved[i, 2], current[j, 0] + current[j, 2])
+                     - max(moved[i, 0], current[j, 0]), 0.0)
+            ih = max(min(moved[i, 1] + moved[i, 3], current[j, 1] + current[j, 3])
+                     - max(moved[i, 1], current[j, 1]), 0.0)
+            inter = iw * ih
+            union = moved[i, 2] * moved[i, 3] + current[j, 2] * current[j, 3] - inter
+            overlap[i, j] = inter / union if union > 0 else 0.0
+    best_prev = np.empty(M, dtype=np.int64)
+    for j in range(M):
+        best_prev[j] = np.argmax(overlap[:, j])
+    pairs = np.empty((N, 2))
+    P = 0
+    for i in range(N):
+        j = np.argmax(overlap[i])
+        if best_prev[j] == i and overlap[i, j] > min_iou:
+            pairs[P, 0], pairs[P, 1] = cc[j, 0] - cp[i, 0], cc[j, 1] - cp[i, 1]
+            P += 1
+    if P < min_pairs:
+        return False, np.zeros(2)
+    return True, _median_rows(pairs[:P])
 
 
 def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: float,
@@ -133,7 +144,7 @@ def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: fl
     order = np.lexsort((j[near], i[near]))  # the dense form's order: by previous, then current
     candidates = shift[near][order]
     unit = scale[near][order]
-    mode = _mode(candidates, _votes(candidates, mode_radius * unit))
+    mode = _mode_shift(candidates, mode_radius * unit)
     moved = previous.copy()
     moved[:, :2] += mode
     p, c = overlapping_pairs(_edges(moved), _edges(current))
@@ -144,27 +155,7 @@ def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: fl
     if mutual.sum() < min_pairs:
         return None
     k = np.flatnonzero(mutual)
-    return _median(cc[best_cur[k]] - cp[k])
-
-
-def _votes(points: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """For each point a, how many points b (itself included) lie closer than
-    min(radius_a, radius_b) on both axes. Each pair is looked at once: points sorted along
-    x, b after a within radius_a."""
-    order = np.argsort(points[:, 0], kind="stable")
-    x, y, r = points[order, 0], points[order, 1], radius[order]
-    C = len(x)
-    stop = np.searchsorted(x, x + r, side="left")
-    counts = np.maximum(stop - np.arange(C) - 1, 0)
-    total = int(counts.sum())
-    a = np.repeat(np.arange(C), counts)
-    b = np.arange(total) + np.repeat(np.arange(C) + 1 - (np.cumsum(counts) - counts), counts)
-    limit = np.minimum(r[a], r[b])
-    close = (np.abs(x[b] - x[a]) < limit) & (np.abs(y[b] - y[a]) < limit)
-    votes = 1 + np.bincount(a[close], minlength=C) + np.bincount(b[close], minlength=C)
-    out = np.empty(C, dtype=np.int64)
-    out[order] = votes
-    return out
+    return _median_rows(cc[best_cur[k]] - cp[k])
 
 
 def _iou_pairs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -174,3 +165,52 @@ def _iou_pairs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     inter = np.clip(hi - lo, 0.0, None).prod(axis=-1)
     union = a[:, 2:].prod(axis=-1) + b[:, 2:].prod(axis=-1) - inter
     return inter / np.maximum(union, 1e-12)
+
+
+@njit
+def _mode_shift(candidates, radius):
+    """The candidate shift with the most votes: a candidate b votes for a when it lies closer
+    than min(radius_a, radius_b) on both axes (itself included); each pair is looked at once,
+    candidates swept along x. Ties go to the smallest |dx| + |dy|, then the lowest (dx, dy),
+    so that the order of the boxes, which is no information, does not matter."""
+    C = len(candidates)
+    votes = np.ones(C, dtype=np.int64)
+    order = np.argsort(candidates[:, 0], kind="mergesort")
+    for a in range(C):
+        ka = order[a]
+        for b in range(a + 1, C):
+            kb = order[b]
+            if not candidates[kb, 0] < candidates[ka, 0] + radius[ka]:
+                break
+            limit = min(radius[ka], radius[kb])
+            if (abs(candidates[kb, 0] - candidates[ka, 0]) < limit
+                    and abs(candidates[kb, 1] - candidates[ka, 1]) < limit):
+                votes[ka] += 1
+                votes[kb] += 1
+    top, best = votes.max(), -1
+    for k in range(C):
+        if votes[k] != top:
+            continue
+        if best < 0:
+            best = k
+            continue
+        key = abs(candidates[k, 0]) + abs(candidates[k, 1])
+        key_best = abs(candidates[best, 0]) + abs(candidates[best, 1])
+        if key < key_best or (key == key_best and (
+                candidates[k, 0] < candidates[best, 0] or (
+                    candidates[k, 0] == candidates[best, 0]
+                    and candidates[k, 1] < candidates[best, 1]))):
+            best = k
+    return candidates[best].copy()
+
+
+@njit
+def _median_rows(values):
+    """np.median(values, axis=0) of (P, 2) values, P >= 1."""
+    out = np.empty(2)
+    P = len(values)
+    for axis in range(2):
+        ordered = np.sort(values[:, axis])
+        half = P // 2
+        out[axis] = ordered[half] if P % 2 else (ordered[half - 1] + ordered[half]) / 2.0
+    return out

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from occtrack.lidar import BeamModel, empirical_ratio, likelihood_ratio
+from occtrack.models.beam import BeamModel, likelihood_ratio
+from occtrack.scenarios.lidar import empirical_ratio
 from occtrack.viz.frame import check_new
 from occtrack.viz.output import save
 

@@ -1,4 +1,4 @@
-"""Separable-likelihood tracking with a scanning range sensor (paper section V).
+"""The scanning range sensor's beam model and its separable likelihood (paper section V).
 
 A scanning lidar gives one range z per beam. With deterministic restricted measurement-wise
 occlusion, the return at z hides every return farther along its beam; clutter returns are
@@ -22,8 +22,9 @@ object (a hit), about 1 - P_D just beyond it (the beam passed where the object w
 negative information) and about 1 well short of it (the object is hidden: no information). The
 three regimes of the paper's simplification are `regime`.
 
-Written here because it is the paper's derivation itself; scipy supplies the normal density and
-CDF.
+The Bernoulli update with it is `occtrack.filters.beam_bernoulli`; simulated beams are
+`occtrack.scenarios.lidar`. Written here because it is the paper's derivation itself; scipy
+supplies the normal density and CDF.
 """
 
 from __future__ import annotations
@@ -85,17 +86,6 @@ def gaussian_likelihood_ratio(z: float, mean: np.ndarray, var: np.ndarray,
     return hit / model.kappa + 1.0 - model.p_d * ndtr((z - mean) / s)
 
 
-def update_bernoulli(r: float, particles: np.ndarray, weights: np.ndarray, z: float,
-                     model: BeamModel) -> tuple[float, np.ndarray]:
-    """Exact Bernoulli update of an object's range particles by one beam: existence
-    r' = r E[L] / (1 - r + r E[L]) and weights w' proportional to w L."""
-    lik = likelihood_ratio(z, particles, model)
-    weighted = np.asarray(weights, float) * lik
-    mean_lik = weighted.sum() / np.sum(weights)
-    r_new = r * mean_lik / (1.0 - r + r * mean_lik)
-    return float(r_new), weighted / weighted.sum()
-
-
 def regime(z_hat: np.ndarray, z: float, model: BeamModel, width: float = 3.0) -> np.ndarray:
     """The paper's simplification for well-separated objects, by predicted range z_hat:
     "hit" (z_hat close to z: normal update), "passed" (z_hat nearer than z: the miss branch)
@@ -103,31 +93,3 @@ def regime(z_hat: np.ndarray, z: float, model: BeamModel, width: float = 3.0) ->
     z_hat = np.asarray(z_hat, float)
     near = np.abs(z_hat - z) <= width * model.sigma
     return np.where(near, "hit", np.where(z_hat < z, "passed", "hidden"))
-
-
-def simulate_beams(x: float | None, model: BeamModel, n: int,
-                   rng: np.random.Generator) -> np.ndarray:
-    """n independent readings of a beam with an object at x (None: no object): the nearest of
-    the object's return and the clutter returns, or max_range."""
-    best = np.full(n, model.max_range)
-    if x is not None:
-        hit = rng.random(n) < model.p_d
-        ret = rng.normal(x, model.sigma, n)
-        ok = hit & (ret >= 0) & (ret < model.max_range)
-        best[ok] = ret[ok]
-    counts = rng.poisson(model.clutter_rate, n)
-    if counts.any():
-        owner = np.repeat(np.arange(n), counts)
-        np.minimum.at(best, owner, rng.uniform(0, model.max_range, counts.sum()))
-    return best
-
-
-def empirical_ratio(model: BeamModel, x: float, edges: np.ndarray, n: int,
-                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Histogram ratio of simulated beams with and without the object at x, per bin of
-    `edges`, and its standard error: the Monte Carlo check of `likelihood_ratio`."""
-    with_obj = np.histogram(simulate_beams(x, model, n, rng), edges)[0]
-    without = np.histogram(simulate_beams(None, model, n, rng), edges)[0]
-    ratio = with_obj / np.maximum(without, 1)
-    se = ratio * np.sqrt(1 / np.maximum(with_obj, 1) + 1 / np.maximum(without, 1))
-    return ratio, se

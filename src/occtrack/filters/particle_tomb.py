@@ -35,15 +35,17 @@ propagation.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from scipy.stats import qmc
 
 from occtrack.association import lbp_marginals
-from occtrack.highway.config import TrackerConfig
-from occtrack.highway.occlusion import HighwayContext, make_occlusion
-from occtrack.highway.sensor import MeasurementModel, Scan
+from occtrack.config.highway import HighwayTrackerConfig
+from occtrack.models.highway_sensor import MeasurementModel, Scan
+from occtrack.occlusion.highway import HighwayContext, make_occlusion
 
 
 @dataclass(frozen=True)
@@ -67,21 +69,15 @@ class Estimates:
 
 def systematic_resample(weights: np.ndarray, n_out: int, rng: np.random.Generator) -> np.ndarray:
     """Row-wise systematic resampling: (R, N) weights -> (R, n_out) indices into each row."""
-    rows, n = weights.shape
-    c = np.cumsum(weights, axis=1)
-    total = c[:, -1:]
-    c = c / np.where(total > 0, total, 1.0)
-    offset = np.arange(rows)[:, None]
-    u = (rng.random((rows, 1)) + np.arange(n_out)) / n_out
-    idx = np.searchsorted((c + offset).ravel(), (u + offset).ravel(), side="right")
-    return np.clip(idx.reshape(rows, n_out) - offset * n, 0, n - 1)
+    u0 = rng.random(len(weights))
+    return _systematic(np.ascontiguousarray(weights, dtype=float), u0, n_out)
 
 
 class HighwayTracker:
     """`step(scan) -> Estimates`, once per time step. `occlusion` is a handler name
     (measurement-wise, object-wise-expval, object-wise-grid) or an OcclusionModel."""
 
-    def __init__(self, config: TrackerConfig, occlusion="measurement-wise",
+    def __init__(self, config: HighwayTrackerConfig, occlusion="measurement-wise",
                  seed: int | np.random.Generator = 0):
         config.validate()
         self.config = c = config
@@ -107,12 +103,6 @@ class HighwayTracker:
         self.last_iterations = 0
 
     # -- model pieces -------------------------------------------------------------------------
-    def _survival(self, lane: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """P_S per particle: `survival` while the rear is on the section, else 0."""
-        half = self.config.road.half_length
-        rear = np.where(self.direction[lane] > 0, x[..., 0], -(x[..., 0] + x[..., 1]))
-        return np.where(rear < half, self.config.survival, 0.0)
-
     def _births(self) -> np.ndarray:
         """Cars that entered within the last step: front up to one step past the entry. Drawn
         as a randomly shifted scrambled Sobol set (randomised quasi-Monte Carlo): unbiased like
@@ -126,13 +116,6 @@ class HighwayTracker:
         left = np.where(d > 0, front - length, -front)
         return np.stack([left, length, d * speed], axis=-1)
 
-    def _bounds(self, x: np.ndarray, lane: np.ndarray) -> None:
-        """Reflect lengths and speeds back into the prior's support (in place)."""
-        c = self.config
-        x[..., 1] = _reflect(x[..., 1], c.min_length, c.max_length)
-        d = self.direction[lane]
-        x[..., 2] = d * _reflect(d * x[..., 2], c.min_speed, c.max_speed)
-
     # -- one step -----------------------------------------------------------------------------
     def step(self, scan: Scan) -> Estimates:
         c = self.config
@@ -142,15 +125,11 @@ class HighwayTracker:
         nu = c.undetected_particles
 
         # 1. Predict.
-        x[..., 0] += x[..., 2]
-        ps = self._survival(lane[:, None], x)
-        alive = np.sum(w * ps, axis=1)
+        alive = _advance(x, w, self.direction[lane], c.road.half_length, c.survival)
         r *= alive
-        w *= ps
         w /= np.where(alive > 0, alive, 1.0)[:, None]
         ux, uw = self.ux, self.uw
-        ux[:, :nu, 0] += ux[:, :nu, 2]
-        uw[:, :nu] *= self._survival(np.arange(self.n_lanes)[:, None], ux[:, :nu])
+        _advance(ux[:, :nu], uw[:, :nu], self.direction, c.road.half_length, c.survival)
         ux[:, nu:] = self._births()
         uw[:, nu:] = c.birth_rate / c.birth_particles
         order = np.argsort(ux[..., 0], axis=1)
@@ -179,15 +158,17 @@ class HighwayTracker:
         # 3. Association weights and marginals.
         mlane = scan.lane
         if m:
-            near_u, hit_u = self._undetected_hits(scan, v_u)
+            first_u, count_u, hit_u = self._undetected_hits(scan, uw * v_u)
             e = pd * hit_u.sum(axis=1)
             # A floor far below any real weight: outside the clutter's support (e.g. a car
             # entering) w_new may be 0, which loopy belief propagation cannot divide by.
             w_new = np.maximum(c.clutter_rate * self.model.clutter_density(scan) + e, 1e-12)
         if m and n:
-            ti, mj, lik = self._pairs(x, lane, scan)
+            ti, mj = self._pairs(x, lane, scan)
+            # hit_pair[p, k] = w v p(z | x) of track ti[p]'s particle k and measurement mj[p]
+            hit_pair = self.model.hit_weights(x, w * v_t, ti, np.zeros_like(ti),
+                                              np.full_like(ti, N), N, scan, mj)
             w_hit = np.zeros((n, m))
-            hit_pair = (w[ti] * v_t[ti]) * lik
             w_hit[ti, mj] = r[ti] * pd * hit_pair.sum(axis=1)
             marg = lbp_marginals(w_hit, w_miss, w_new, c.lbp_tol, c.lbp_max_iter)
             self.last_iterations = marg.iterations
@@ -197,7 +178,7 @@ class HighwayTracker:
             p_new = np.ones(m)
 
         # 4. Update tracks, the Poisson part, and start new tracks.
-        post = (p_miss / np.maximum(w_miss, 1e-300))[:, None] * r[:, None] * w * miss_t
+        post = (p_miss * r / np.maximum(w_miss, 1e-300))[:, None] * w * miss_t
         if m and n and len(ti):
             gain = p_hit[ti, mj] / np.maximum(w_hit[ti, mj], 1e-300)
             # Pairs come grouped by track (np.nonzero order): add each group's rows at once.
@@ -211,7 +192,10 @@ class HighwayTracker:
             r_born = p_new * e / np.maximum(w_new, 1e-300)
             born = np.flatnonzero(r_born > c.prune_threshold)
             if len(born):
-                self._start_tracks(ux.reshape(-1, 3)[near_u[born]], hit_u[born], r_born[born],
+                # the Poisson particles each measurement saw (padding has weight 0)
+                width = hit_u.shape[1]
+                at = np.minimum(first_u[born, None] + np.arange(width), ux.shape[1] - 1)
+                self._start_tracks(ux[mlane[born, None], at], hit_u[born], r_born[born],
                                    mlane[born])
 
         # 5. Resample, regularise, prune; recycle the Poisson particles.
@@ -220,35 +204,29 @@ class HighwayTracker:
         self._prune()
         return self.estimates()
 
-    def _undetected_hits(self, scan: Scan, v_u: np.ndarray):
+    def _undetected_hits(self, scan: Scan, wv_u: np.ndarray):
         """For each measurement, the Poisson particles of its lane whose left end lies within
-        6 sigma of the measured shape (a slice of the lane's particles, sorted by left end),
-        as flat indices (m, width), and their hit weights w v p(z | x) (0 on padding)."""
+        6 sigma of the measured shape (a slice of the lane's particles, sorted by left end):
+        the slice's first index and length, and the hit weights w v p(z | x) (m, width),
+        0 past each slice's end."""
         reach = MeasurementModel.tail * self.config.noise_std
         per_lane = self.ux.shape[1]
-        lefts = self.ux[..., 0]
         lane = scan.lane
         lo = scan.left[:, 0] - reach
         hi = np.maximum(scan.left[:, 1], scan.right[:, 1]) + reach
         # Rows are sorted; a lane offset far beyond the road makes the whole array sorted.
         shift = 1e3 * (self.config.road.half_length + self.config.max_length + reach)
-        keys = (lefts + shift * np.arange(self.n_lanes)[:, None]).ravel()
+        keys = (self.ux[..., 0] + shift * np.arange(self.n_lanes)[:, None]).ravel()
         key = lane * per_lane
         first = np.searchsorted(keys, lo + shift * lane) - key
-        last = np.searchsorted(keys, hi + shift * lane, side="right") - key
-        width = max(int(np.max(last - first)), 1)
-        offs = np.arange(width)
-        valid = offs[None, :] < (last - first)[:, None]
-        idx = key[:, None] + np.minimum(first[:, None] + offs[None, :], per_lane - 1)
-        flat = self.ux.reshape(-1, 3)[idx]
-        lik = self.model.likelihood(flat[..., 0], flat[..., 0] + flat[..., 1], scan.left,
-                                    scan.right, scan.left_hidden, scan.right_hidden)
-        hit = np.where(valid, self.uw.ravel()[idx] * v_u.ravel()[idx] * lik, 0.0)
-        return idx, hit
+        count = np.searchsorted(keys, hi + shift * lane, side="right") - key - first
+        width = max(int(np.max(count)), 1)
+        hit = self.model.hit_weights(self.ux, wv_u, lane, first, count, width, scan,
+                                     np.arange(len(scan)))
+        return first, count, hit
 
     def _pairs(self, x: np.ndarray, lane: np.ndarray, scan: Scan):
-        """(track, measurement) pairs of one lane whose ends can match, and their particle
-        likelihoods (pairs, N)."""
+        """(track, measurement) pairs of one lane whose ends can match, grouped by track."""
         reach = MeasurementModel.tail * self.config.noise_std
         left = x[..., 0]
         right = left + x[..., 1]
@@ -259,10 +237,7 @@ class HighwayTracker:
                 & (l_max[:, None] + reach >= scan.left[None, :, 0])
                 & (r_min[:, None] - reach <= scan.right[None, :, 1])
                 & (r_max[:, None] + reach >= scan.right[None, :, 0]))
-        ti, mj = np.nonzero(gate)
-        lik = self.model.likelihood(left[ti], right[ti], scan.left[mj], scan.right[mj],
-                                    scan.left_hidden[mj], scan.right_hidden[mj])
-        return ti, mj, lik
+        return np.nonzero(gate)
 
     def _start_tracks(self, particles: np.ndarray, weights: np.ndarray, existence: np.ndarray,
                       lane: np.ndarray) -> None:
@@ -279,9 +254,8 @@ class HighwayTracker:
         if k == 0:
             return
         idx = systematic_resample(weights, c.particles, self.rng)
-        xs = particles[np.arange(k)[:, None], idx]
         s = slice(self.n, self.n + k)
-        self.x[s] = self._regularise(xs, particles, weights, lane)
+        self.x[s] = self._regularise(idx, particles, weights, lane)
         self.w[s] = 1.0 / c.particles
         self.r[s], self.lane[s] = existence, lane
         self.label[s] = self.next_label + np.arange(k)
@@ -299,28 +273,24 @@ class HighwayTracker:
             return
         x, wr, lane = self.x[rows], w[rows], self.lane[rows]
         idx = systematic_resample(wr, c.particles, self.rng)
-        xs = x[np.arange(len(rows))[:, None], idx]
-        self.x[rows] = self._regularise(xs, x, wr, lane)
+        self.x[rows] = self._regularise(idx, x, wr, lane)
         self.w[rows] = 1.0 / c.particles
 
-    def _regularise(self, xs: np.ndarray, x: np.ndarray, w: np.ndarray,
+    def _regularise(self, idx: np.ndarray, x: np.ndarray, w: np.ndarray,
                     lane: np.ndarray) -> np.ndarray:
-        """Liu-West kernel on resampled particles xs: xs <- a xs + (1 - a) mean + h chol(cov)
-        eps, a = sqrt(1 - h^2), with the mean and covariance of the weighted cloud (x, w) before
-        resampling (less noisy); then back into the prior's support."""
-        h = self.config.kernel_bandwidth
+        """The particles x[row, idx] resampled from the weighted clouds (x, w), moved by the
+        Liu-West kernel: xs <- a xs + (1 - a) mean + h chol(cov) eps, a = sqrt(1 - h^2), with
+        the mean and covariance of the cloud before resampling (less noisy); then back into
+        the prior's support."""
+        c = self.config
+        h = c.kernel_bandwidth
         if h == 0:
-            return xs
-        wn = w / w.sum(axis=1, keepdims=True)
-        mean = np.matmul(wn[:, None, :], x)
-        dev = x - mean
-        cov = np.matmul(dev.transpose(0, 2, 1) * wn[:, None, :], dev) + 1e-10 * np.eye(3)
-        chol = np.linalg.cholesky(cov)
-        a = np.sqrt(1.0 - h * h)
-        eps = self.rng.standard_normal(xs.shape, dtype=np.float32)
-        out = a * xs + (1.0 - a) * mean + h * np.matmul(eps, chol.transpose(0, 2, 1))
-        self._bounds(out, lane[:, None])
-        return out
+            return x[np.arange(len(x))[:, None], idx]
+        eps = self.rng.standard_normal(idx.shape + (3,), dtype=np.float32)
+        return _liu_west(np.ascontiguousarray(x, dtype=float),
+                         np.ascontiguousarray(w, dtype=float), idx, eps, h,
+                         self.direction[lane].astype(float), c.min_length, c.max_length,
+                         c.min_speed, c.max_speed)
 
     def _resample_undetected(self) -> None:
         c = self.config
@@ -349,7 +319,97 @@ class HighwayTracker:
                          mean[:, 2], self.r[sel].copy())
 
 
-def _reflect(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    v = np.where(v < lo, 2 * lo - v, v)
-    v = np.where(v > hi, 2 * hi - v, v)
-    return np.clip(v, lo, hi)
+# -- compiled loops (numba): prediction, resampling and the kernel move, one pass per track ---
+
+@njit(cache=True)
+def _advance(x, w, direction, half, survival):
+    """Constant speed for one step, then P_S: `survival` while the rear is on the section, else
+    0, applied to the weights in place. Returns each row's surviving weight."""
+    rows, n = w.shape
+    alive = np.zeros(rows)
+    for i in range(rows):
+        for k in range(n):
+            x[i, k, 0] += x[i, k, 2]
+            rear = x[i, k, 0] if direction[i] > 0 else -(x[i, k, 0] + x[i, k, 1])
+            if rear >= half:
+                w[i, k] = 0.0
+            else:
+                w[i, k] *= survival
+                alive[i] += w[i, k]
+    return alive
+
+
+@njit(cache=True)
+def _systematic(weights, u0, n_out):
+    """Systematic resampling of each row with offset u0[row]: index k is drawn for the points
+    (u0 + j) / n_out that fall in its slice of the cumulative weight."""
+    rows, n = weights.shape
+    idx = np.empty((rows, n_out), np.int64)
+    for r in range(rows):
+        total = 0.0
+        for k in range(n):
+            total += weights[r, k]
+        scale = 1.0 / total if total > 0 else 0.0
+        k = 0
+        c = weights[r, 0] * scale
+        for j in range(n_out):
+            u = (u0[r] + j) / n_out
+            while c <= u and k < n - 1:
+                k += 1
+                c += weights[r, k] * scale
+            idx[r, j] = k
+    return idx
+
+
+@njit(cache=True, inline="always")
+def _reflect1(v, lo, hi):
+    if v < lo:
+        v = 2 * lo - v
+    if v > hi:
+        v = 2 * hi - v
+    return min(max(v, lo), hi)
+
+
+@njit(cache=True)
+def _liu_west(x, w, idx, eps, h, direction, min_length, max_length, min_speed, max_speed):
+    rows, n_out = idx.shape
+    n = x.shape[1]
+    out = np.empty((rows, n_out, 3))
+    a = math.sqrt(1.0 - h * h)
+    mean = np.empty(3)
+    cov = np.empty((3, 3))
+    chol = np.zeros((3, 3))
+    for r in range(rows):
+        total = 0.0
+        for k in range(n):
+            total += w[r, k]
+        mean[:] = 0.0
+        for k in range(n):
+            for d in range(3):
+                mean[d] += w[r, k] * x[r, k, d]
+        mean /= total
+        cov[:] = 0.0
+        for k in range(n):
+            wk = w[r, k] / total
+            for d in range(3):
+                dd = x[r, k, d] - mean[d]
+                for e in range(d + 1):
+                    cov[d, e] += wk * dd * (x[r, k, e] - mean[e])
+        for d in range(3):  # Cholesky of the 3 x 3, lower; the jitter keeps it positive
+            for e in range(d + 1):
+                t = cov[d, e] + (1e-10 if d == e else 0.0)
+                for f in range(e):
+                    t -= chol[d, f] * chol[e, f]
+                chol[d, e] = math.sqrt(max(t, 0.0)) if d == e else (
+                    t / chol[e, e] if chol[e, e] > 0 else 0.0)
+        sign = direction[r]
+        for j in range(n_out):
+            src = idx[r, j]
+            for d in range(3):
+                move = 0.0
+                for e in range(d + 1):
+                    move += chol[d, e] * eps[r, j, e]
+                out[r, j, d] = a * x[r, src, d] + (1.0 - a) * mean[d] + h * move
+            out[r, j, 1] = _reflect1(out[r, j, 1], min_length, max_length)
+            out[r, j, 2] = sign * _reflect1(sign * out[r, j, 2], min_speed, max_speed)
+    return out

@@ -1,4 +1,11 @@
-"""Settings of the box tracker, one dataclass, loadable from a TOML file (floor 1: the schema).
+"""The settings schema (floor 1): every TOML table's fields, types and ranges, one loader.
+
+Here: the box tracker (`TrackerConfig`, a file's top-level keys) and the machinery every table
+uses (`load_toml`, `build`: names and types; `check_ranges`: ranges, in the messages a user
+reads). `occtrack.config.highway`: the highway study's tables, [simulation], [simulation.road]
+and [tracker] (`HighwayTrackerConfig`). The CLI, the API and the simulations all read these.
+
+The box tracker's settings:
 
 Every setting is in units that transfer between cameras, resolutions and frame rates:
 lengths in box heights (a person's image size sets the scale of their noise and speed, which
@@ -202,22 +209,7 @@ class TrackerConfig:
     @classmethod
     def from_dict(cls, values: dict, source: str = "configuration") -> TrackerConfig:
         """Build from plain values (as TOML gives them), checking names and types."""
-        fields = {f.name: f for f in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - set(fields))
-        if unknown:
-            raise OcctrackError(f"unknown setting {unknown[0]!r}; known settings: "
-                                f"{', '.join(fields)}", source)
-        clean = {}
-        for name, value in values.items():
-            default = fields[name].default
-            try:
-                clean[name] = _coerce(name, value, default)
-            except (TypeError, ValueError) as err:
-                raise OcctrackError(str(err), source) from None
-        try:
-            return cls(**clean)
-        except ValueError as err:
-            raise OcctrackError(str(err), source) from None
+        return build(cls, values, source)
 
     @classmethod
     def from_toml(cls, path: str | Path, **overrides) -> TrackerConfig:
@@ -237,8 +229,49 @@ def load_toml(path: str | Path) -> dict:
         raise OcctrackError("no such file", p) from None
     except IsADirectoryError:
         raise OcctrackError("is a directory, expected a TOML file", p) from None
-    except tomllib.TOMLDecodeError as err:
+    except OSError as err:
+        raise OcctrackError(f"cannot read: {err.strerror}", p) from None
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
         raise OcctrackError(f"not valid TOML: {err}", p) from None
+
+
+def build(cls, values: dict, source: str = "configuration", table: str = ""):
+    """An instance of the settings dataclass `cls` from plain values (as TOML gives them):
+    unknown names, wrong types and out-of-range values are an OcctrackError naming the
+    setting (and its `table`, when the file has several) and `source`."""
+    where = f"[{table}] " if table else ""
+    fields = {f.name: f for f in dataclasses.fields(cls)
+              if f.default is not dataclasses.MISSING}
+    unknown = sorted(set(values) - set(fields))
+    if unknown:
+        shown = f"{table}.{unknown[0]}" if table else unknown[0]
+        raise OcctrackError(f"unknown setting {shown!r}; known settings"
+                            f"{' of [' + table + ']' if table else ''}: "
+                            f"{', '.join(fields)}", source)
+    clean = {}
+    for name, value in values.items():
+        try:
+            clean[name] = _coerce(name, value, fields[name].default)
+        except (TypeError, ValueError) as err:
+            raise OcctrackError(where + str(err), source) from None
+    try:
+        return cls(**clean)
+    except ValueError as err:
+        raise OcctrackError(where + str(err), source) from None
+
+
+def check_ranges(settings, ranges: dict[str, str]) -> None:
+    """ValueError naming the first setting outside its range. A range is written as an
+    interval, "[0, 1]", "(0, 1000]", "[1, 100000]"; integer settings read "between"."""
+    for name, interval in ranges.items():
+        value = getattr(settings, name)
+        low, high = (float(v) for v in interval[1:-1].split(","))
+        above = value > low if interval[0] == "(" else value >= low
+        below = value < high if interval[-1] == ")" else value <= high
+        if not (above and below):  # NaN fails both
+            if isinstance(value, int) and not isinstance(value, bool):
+                raise ValueError(f"{name} must be between {low:g} and {high:g}, not {value}")
+            raise ValueError(f"{name} must be a number in {interval}, not {value}")
 
 
 def _coerce(name: str, value, default):
@@ -263,3 +296,19 @@ def _coerce(name: str, value, default):
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise TypeError(f"{name} must be a number, not {value!r}")
     return float(value)
+
+
+# The highway study's tables ([simulation], [simulation.road], [tracker]); imported last, as
+# they use the machinery above.
+from occtrack.config.highway import (  # noqa: E402
+    SENSOR_MODES,
+    HighwayTrackerConfig,
+    RoadConfig,
+    SimulationConfig,
+    highway_from_dict,
+    load_highway,
+)
+
+__all__ = ["CAMERA_MOTION_NAMES", "INTEGER_RANGES", "OCCLUSION_NAMES", "SENSOR_MODES",
+           "HighwayTrackerConfig", "RoadConfig", "SimulationConfig", "TrackerConfig", "build",
+           "check_ranges", "highway_from_dict", "load_highway", "load_toml"]

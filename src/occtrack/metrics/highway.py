@@ -10,7 +10,7 @@ false split (each a per-step mean, adding up to the total).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -82,34 +82,3 @@ class ScoreAccumulator:
         return HighwayScore(self.total / s, self.total / max(self.car_steps, 1),
                             self.localisation / s, self.missed / s, self.false / s,
                             self.steps, self.car_steps, self.n_missed, self.n_false)
-
-
-def evaluate(simulation, tracker_config, sensor: str, tracker: str, steps: int, seed: int,
-             on_step=None, progress=None) -> tuple[HighwayScore, float]:
-    """Run `tracker` on `steps` steps of the simulation drawn with `seed` and score it.
-    Returns the score and the seconds spent in the tracker alone. The tracker's random stream
-    is a third child of `seed` (the traffic and the sensor use the first two).
-    `on_step(t, cars, scan, estimates)` is called after every step; `progress` wraps the
-    step iterator (a progress bar)."""
-    import time
-
-    from occtrack.highway.simulate import simulate
-    from occtrack.highway.tracker import HighwayTracker
-
-    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(3)[2])
-    filt = HighwayTracker(tracker_config, tracker, seed=rng)
-    acc = ScoreAccumulator()
-    seconds = 0.0
-    reported: set[int] = set()
-    frames = simulate(simulation, sensor, steps, seed)
-    if progress is not None:
-        frames = progress(frames)
-    for t, (cars, scan) in enumerate(frames):
-        start = time.perf_counter()
-        estimates = filt.step(scan)
-        seconds += time.perf_counter() - start
-        acc.add(cars, estimates)
-        reported.update(estimates.label.tolist())
-        if on_step is not None:
-            on_step(t, cars, scan, estimates)
-    return replace(acc.result(), tracks=len(reported)), seconds

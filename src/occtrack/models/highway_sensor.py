@@ -1,0 +1,265 @@
+"""The highway sensor as the trackers model it: shapes seen by angle from a point beside the
+road, each reported by its two ends (paper appendix).
+
+A shape that is not wholly hidden is reported by its two ends: an end that is seen is a point;
+an end that is hidden is the interval in which it could lie (`occtrack.occlusion.extents`).
+Under measurement-wise occlusion (every car first makes its measurement, then the measurements
+hide the measurements) the probability that a shape with ends (l, r) is wholly hidden is exactly
+    q = sum over hidden parts [a, b] of P(a <= l + e1 <= b) P(a <= r + e2 <= b),
+e1, e2 ~ N(0, sigma^2), which the measurement-wise tracker uses (`MeasurementModel`). The
+simulated sensor itself is a scenario (`occtrack.scenarios.highway`).
+
+The sensor is particular to this study, so it is written here; its per-particle loops are
+compiled with numba (a Python loop per particle would be 100 times slower, and numpy's
+whole-array steps make a temporary array per operation).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from occtrack.occlusion.extents import union
+
+
+@dataclass(frozen=True)
+class Scan:
+    """One step's measurements. left[j] and right[j] are (low, high) intervals; an end that was
+    seen has low == high, written once, and `left_hidden[j]` / `right_hidden[j]` say which ends
+    are intervals. `source[j]` is the true car's id (-1 for clutter): for tests and pictures
+    only, never read by a tracker."""
+
+    lane: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    left_hidden: np.ndarray
+    right_hidden: np.ndarray
+    source: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.lane)
+
+    @property
+    def extent(self) -> tuple[np.ndarray, np.ndarray]:
+        """The outer bounds (left low, right high): everything this shape can hide."""
+        return self.left[:, 0], self.right[:, 1]
+
+    @staticmethod
+    def empty() -> Scan:
+        return Scan(np.empty(0, np.int64), np.empty((0, 2)), np.empty((0, 2)),
+                    np.empty(0, bool), np.empty(0, bool), np.empty(0, np.int64))
+
+
+class MeasurementModel:
+    """The sensor as the trackers model it: the measurement-wise law above, with known noise,
+    road and clutter. Distances, likelihoods and probabilities in metres of a car's own lane.
+
+    A shape's likelihood given a car with ends (l, r) sums the two ways its two noisy ends can
+    have been put in order:
+        p(z | l, r) = f_left(l) f_right(r) + f_left(r) f_right(l),
+    with f(e) = N(z; e, sigma^2) for a seen end and P(e + noise in [low, high]) for a hidden one
+    (a density in the seen ends, a probability in the hidden ones). Clutter is scored the same
+    way: its density over the seen ends, integrated over the hidden intervals.
+    """
+
+    tail = 6.0
+    """Standard deviations beyond which a Gaussian end is taken to be 0 (tails below 1e-8)."""
+
+    def __init__(self, config):
+        self.distances = config.road.distances
+        self.n_lanes = config.road.n_lanes
+        self.half_length = config.road.half_length
+        self.sigma = float(config.noise_std)
+        self.clutter_lengths = (config.clutter_min_length, config.clutter_max_length)
+
+    def likelihood(self, left: np.ndarray, right: np.ndarray, z_left: np.ndarray,
+                   z_right: np.ndarray, left_hidden: np.ndarray,
+                   right_hidden: np.ndarray) -> np.ndarray:
+        """p(z_p | particle) for rows p of (P, N) particle ends and P measurements."""
+        return _likelihood(np.ascontiguousarray(left, dtype=float),
+                           np.ascontiguousarray(right, dtype=float),
+                           np.ascontiguousarray(z_left, dtype=float),
+                           np.ascontiguousarray(z_right, dtype=float),
+                           np.asarray(left_hidden, bool), np.asarray(right_hidden, bool),
+                           self.sigma, self.tail)
+
+    def hit_weights(self, particles: np.ndarray, weights: np.ndarray, row: np.ndarray,
+                    first: np.ndarray, count: np.ndarray, width: int,
+                    scan: Scan, measurement: np.ndarray) -> np.ndarray:
+        """weights * p(z_j | particle) over windows of particles, without copying them out:
+        pair p scores measurement `measurement[p]` against particles[row[p], first[p] + k]
+        (left end, length, ...) for k < count[p], 0 for count[p] <= k < width. Returns
+        (pairs, width)."""
+        j = np.asarray(measurement, np.int64)
+        return _hit_weights(particles, weights, np.asarray(row, np.int64),
+                            np.asarray(first, np.int64), np.asarray(count, np.int64), width,
+                            scan.left[j], scan.right[j], scan.left_hidden[j],
+                            scan.right_hidden[j], self.sigma, self.tail)
+
+    def occluded_parts(self, scan: Scan) -> list[tuple[np.ndarray, np.ndarray]]:
+        """For each lane, the hidden parts (sorted disjoint intervals, metres in that lane)
+        made by the measured shapes of the nearer lanes."""
+        parts = []
+        starts, ends = np.empty(0), np.empty(0)
+        lo, hi = scan.extent
+        for k, d in enumerate(self.distances):
+            parts.append((starts * d, ends * d))
+            sel = scan.lane == k
+            starts, ends = union(np.concatenate((starts, lo[sel] / d)),
+                                 np.concatenate((ends, hi[sel] / d)))
+        return parts
+
+    def hidden_probability(self, lane: np.ndarray, left: np.ndarray, right: np.ndarray,
+                           scan: Scan, parts=None) -> np.ndarray:
+        """q: the probability that a car's noisy shape would lie wholly inside one hidden part
+        of its lane, sum_C P(l' in C) P(r' in C). Only parts within `tail` sigma of both ends
+        are visited (a binary search, then a walk back), so the cost is in the particles near
+        them. `parts`: `occluded_parts(scan)`, if already at hand."""
+        if parts is None:
+            parts = self.occluded_parts(scan)
+        count = np.array([len(lo) for lo, _ in parts], np.int64)
+        if count.sum() == 0 or len(lane) == 0:
+            return np.zeros(len(lane))
+        start = np.concatenate(([0], np.cumsum(count)))
+        lo = np.concatenate([p[0] for p in parts])
+        hi = np.concatenate([p[1] for p in parts])
+        return _hidden_probability(np.asarray(lane, np.int64), np.asarray(left, float),
+                                   np.asarray(right, float), lo, hi, start, self.sigma,
+                                   self.tail * self.sigma)
+
+    def clutter_density(self, scan: Scan) -> np.ndarray:
+        """p_F(z_j): lane uniform, left end uniform on the section, length uniform; seen ends
+        as a density, hidden ends integrated over their intervals."""
+        half = self.half_length
+        lmin, lmax = self.clutter_lengths
+        c = 1.0 / (self.n_lanes * 2.0 * half * (lmax - lmin))
+        lh, rh = scan.left_hidden, scan.right_hidden
+        s_lo = np.maximum(scan.left[:, 0], -half)
+        s_hi = np.minimum(scan.left[:, 1], half)
+        e_lo, e_hi = scan.right[:, 0], scan.right[:, 1]
+        out = np.zeros(len(scan))
+        seen_s = (scan.left[:, 0] >= -half) & (scan.left[:, 0] <= half)
+        vv = ~lh & ~rh
+        gap = e_lo - scan.left[:, 0]
+        out[vv] = (seen_s & (gap >= lmin) & (gap <= lmax))[vv]
+        hv = lh & ~rh
+        out[hv] = _overlap(s_lo, s_hi, e_lo - lmax, e_lo - lmin)[hv]
+        vh = ~lh & rh
+        out[vh] = (seen_s * _overlap(e_lo, e_hi, scan.left[:, 0] + lmin,
+                                     scan.left[:, 0] + lmax))[vh]
+        hh = lh & rh
+        if hh.any():
+            out[hh] = _band_area(s_lo[hh], s_hi[hh], e_lo[hh], e_hi[hh], lmin, lmax)
+        return c * out
+
+
+def _overlap(a0, a1, b0, b1):
+    return np.clip(np.minimum(a1, b1) - np.maximum(a0, b0), 0.0, None)
+
+
+def _band_area(s0, s1, e0, e1, lmin, lmax):
+    """Area of {(s, e): s in [s0, s1], e in [e0, e1], lmin <= e - s <= lmax}: the integral over
+    s of a piecewise-linear overlap, exact by the trapezoid rule on its breakpoints."""
+    knots = np.stack([s0, s1, e0 - lmax, e0 - lmin, e1 - lmax, e1 - lmin], axis=1)
+    knots = np.sort(np.clip(knots, s0[:, None], np.maximum(s0, s1)[:, None]), axis=1)
+    width = _overlap(e0[:, None], e1[:, None], knots + lmin, knots + lmax)
+    return np.sum(0.5 * (width[:, 1:] + width[:, :-1]) * np.diff(knots, axis=1), axis=1)
+
+
+# -- compiled loops (numba): one pass over the particles, no temporaries ----------------------
+
+_SQRT_HALF = 0.7071067811865476
+_INV_SQRT_2PI = 0.3989422804014327
+
+
+@njit(cache=True, inline="always")
+def _ndtr(x):
+    return 0.5 * math.erfc(-x * _SQRT_HALF)
+
+
+@njit(cache=True, inline="always")
+def _end_term(e, z_lo, z_hi, hidden, inv_sigma, tail):
+    """f(e): N(z; e, sigma^2) for a seen end, P(e + noise in [z_lo, z_hi]) for a hidden one;
+    0 beyond `tail` standard deviations."""
+    lo = (z_lo - e) * inv_sigma
+    if hidden:
+        hi = (z_hi - e) * inv_sigma
+        if hi < -tail or lo > tail:
+            return 0.0
+        return _ndtr(hi) - _ndtr(lo)
+    if lo * lo > tail * tail:
+        return 0.0
+    return math.exp(-0.5 * lo * lo) * _INV_SQRT_2PI * inv_sigma
+
+
+@njit(cache=True, inline="always")
+def _both_orders(lo, hi, zl0, zl1, lh, zr0, zr1, rh, inv, tail):
+    """p(z | ends lo, hi) summed over the two orders of the two ends; the second factor of a
+    product is skipped where the first is 0 (most particles are far from most measurements)."""
+    total = 0.0
+    f = _end_term(lo, zl0, zl1, lh, inv, tail)
+    if f != 0.0:
+        total += f * _end_term(hi, zr0, zr1, rh, inv, tail)
+    f = _end_term(hi, zl0, zl1, lh, inv, tail)
+    if f != 0.0:
+        total += f * _end_term(lo, zr0, zr1, rh, inv, tail)
+    return total
+
+
+@njit(cache=True)
+def _likelihood(left, right, z_left, z_right, left_hidden, right_hidden, sigma, tail):
+    """`_both_orders` of every (particle row, particle)."""
+    rows, n = left.shape
+    out = np.empty((rows, n))
+    inv = 1.0 / sigma
+    for p in range(rows):
+        zl0, zl1, lh = z_left[p, 0], z_left[p, 1], left_hidden[p]
+        zr0, zr1, rh = z_right[p, 0], z_right[p, 1], right_hidden[p]
+        for k in range(n):
+            out[p, k] = _both_orders(left[p, k], right[p, k], zl0, zl1, lh, zr0, zr1, rh, inv,
+                                     tail)
+    return out
+
+
+@njit(cache=True)
+def _hit_weights(particles, weights, row, first, count, width, z_left, z_right, left_hidden,
+                 right_hidden, sigma, tail):
+    out = np.zeros((len(row), width))
+    inv = 1.0 / sigma
+    for p in range(len(row)):
+        zl0, zl1, lh = z_left[p, 0], z_left[p, 1], left_hidden[p]
+        zr0, zr1, rh = z_right[p, 0], z_right[p, 1], right_hidden[p]
+        r, f0 = row[p], first[p]
+        for k in range(count[p]):
+            lo = particles[r, f0 + k, 0]
+            hi = lo + particles[r, f0 + k, 1]
+            out[p, k] = weights[r, f0 + k] * _both_orders(lo, hi, zl0, zl1, lh, zr0, zr1, rh,
+                                                          inv, tail)
+    return out
+
+
+@njit(cache=True)
+def _hidden_probability(lane, left, right, lo, hi, start, sigma, reach):
+    """Parts of lane k are lo/hi[start[k]:start[k + 1]], sorted and disjoint (a few)."""
+    q = np.zeros(len(lane))
+    inv = 1.0 / sigma
+    for i in range(len(lane)):
+        k = lane[i]
+        first = start[k]
+        li, ri = left[i], right[i]
+        total = 0.0
+        # from the last part, skip those starting beyond reach of the left end, then add
+        # while a part can hold the right end (ends grow with the index: parts are disjoint)
+        for j in range(start[k + 1] - 1, first - 1, -1):
+            if lo[j] > li + reach:
+                continue
+            if hi[j] < ri - reach:
+                break
+            a, b = lo[j], hi[j]
+            total += ((_ndtr((b - li) * inv) - _ndtr((a - li) * inv))
+                      * (_ndtr((b - ri) * inv) - _ndtr((a - ri) * inv)))
+        q[i] = min(max(total, 0.0), 1.0)
+    return q
