@@ -319,19 +319,13 @@ class GaussianMixturePMB:
         # occlusion explains the misses of confirmed objects only: a newborn's broad density
         # overlaps the detections around it, and a miss it could blame on them would keep a
         # false track alive; the others are treated as not occludable (o = 0)
-        established = np.where(label >= 0, self.confirmed()[np.maximum(label, 0)], False)
-        occ = np.where(established, self.occ[:n], 0.0)
-
-        r_slot = np.bincount(label[label >= 0], weights=mass[label >= 0], minlength=L)
-        within = np.where(label >= 0, mass / np.maximum(r_slot[label], 1e-300), mass)
+        established, occ, r_slot, within = _occludable(
+            label, mass, self.occ[:n], self.confirmed(), L)
         ctx = OcclusionContext(means=mean, covs=cov, weights=within, owner=label,
                                existence=r_slot, measurements=z,
                                measurement_model=self.measurement)
         terms = self.occlusion.terms(ctx)
-        v = np.clip(terms.visible, 0.0, 1.0)
-        q = np.clip(terms.hidden, 0.0, 1.0)
-        pd = det * (1.0 - occ + occ * v)
-        miss = 1.0 - pd + det * occ * v * q
+        v, q, pd, miss = _miss_terms(det, occ, terms.visible, terms.hidden)
 
         seen_hidden = np.zeros(M) if terms.seen_hidden is None else np.clip(
             terms.seen_hidden, 0.0, 1.0)
@@ -468,15 +462,8 @@ class GaussianMixturePMB:
         """Per-slot bookkeeping of this step's association: an object (row of `slots`) took
         detection j when p_hit_ij > 1/2 (at most one j can); p_hit is given on the pairs
         (row, col)."""
-        self.slot_detection[:] = -1
-        took = p_hit > 0.5
-        self.slot_detection[slots[row[took]]] = col[took]
-        used = self.slot_used
-        hit = self.slot_detection >= 0
-        self.slot_age[used] += 1
-        self.slot_hits[hit] += 1
-        self.slot_coast[used & ~hit] += self.dt
-        self.slot_coast[hit] = 0.0
+        _count_in_place(self.slot_detection, self.slot_age, self.slot_hits, self.slot_coast,
+                        self.slot_used, slots, row, col, p_hit, self.dt)
 
     def _confirm_or_delete(self, label: np.ndarray) -> np.ndarray:
         """Delete the Bernoullis that can no longer be detected in `confirm_hits` of their
@@ -484,21 +471,14 @@ class GaussianMixturePMB:
         repeats for a frame or two starts one, and it must not live on. Returns the mask of
         components kept."""
         c = self.config
-        left = np.maximum(c.confirm_window - self.slot_age, 0)
-        doomed = self.slot_used & (self.slot_hits + left < c.confirm_hits)
-        if not doomed.any():
-            return np.ones(len(label), dtype=bool)
-        self.slot_used[doomed] = False
-        return ~((label >= 0) & doomed[np.maximum(label, 0)])
+        return _confirm_in_place(self.slot_used, self.slot_age, self.slot_hits, label,
+                                 c.confirm_window, c.confirm_hits)
 
     def _sort_by_label(self) -> None:
         """Order the pool by label, Poisson part first (births arrive at the end)."""
         n = self.n
-        order = np.argsort(self.label[:n], kind="stable")
-        if (order == np.arange(n)).all():
-            return
-        for arr in (self.mass, self.mean, self.cov, self.det, self.occ, self.coast, self.label):
-            arr[:n] = arr[:n][order]
+        _sort_pool(self.mass[:n], self.mean[:n], self.cov[:n], self.det[:n], self.occ[:n],
+                   self.coast[:n], self.label[:n])
 
     def _select(self, flat: np.ndarray) -> np.ndarray:
         """Indices (sorted) of the children above the pruning mass; under a hard `capacity`
@@ -610,13 +590,115 @@ class GaussianMixturePMB:
     def _cap_existence(self) -> None:
         """Guard against r exceeding 1 by rounding: scale such an object's masses down."""
         n = self.n
-        r = self.existence()
-        over = r > 1.0
-        if over.any():
-            lab = self.label[:n] >= 0
-            scale = np.where(over, 1.0 / np.maximum(r, 1e-300), 1.0)
-            self.mass[:n][lab] *= scale[self.label[:n][lab]]
+        _cap_in_place(self.mass[:n], self.label[:n], len(self.slot_used))
 
+
+
+@njit
+def _occludable(label, mass, occ_all, confirmed, L):
+    """(established, o, r per slot, w_k / r of its object) of each component: occlusion is
+    for the components of confirmed objects (o = 0 for the others); the Poisson part's
+    components keep w_k."""
+    n = len(label)
+    r = np.zeros(L)
+    for k in range(n):
+        if label[k] >= 0:
+            r[label[k]] += mass[k]
+    established = np.zeros(n, dtype=np.bool_)
+    occ, within = np.zeros(n), np.empty(n)
+    for k in range(n):
+        i = label[k]
+        if i >= 0:
+            established[k] = confirmed[i]
+            if confirmed[i]:
+                occ[k] = occ_all[k]
+            within[k] = mass[k] / max(r[i], 1e-300)
+        else:
+            within[k] = mass[k]
+    return established, occ, r, within
+
+
+@njit
+def _miss_terms(det, occ, visible, hidden):
+    """(v, q, P_D, miss) per component, v and q clipped to [0, 1]: P_D = d (1 - o + o v) and
+    miss = 1 - P_D + d o v q (the module docstring's occlusion line)."""
+    n = len(det)
+    v, q, pd, miss = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    for k in range(n):
+        v[k] = min(max(visible[k], 0.0), 1.0)
+        q[k] = min(max(hidden[k], 0.0), 1.0)
+        pd[k] = det[k] * (1.0 - occ[k] + occ[k] * v[k])
+        miss[k] = 1.0 - pd[k] + det[k] * occ[k] * v[k] * q[k]
+    return v, q, pd, miss
+
+
+@njit
+def _sort_pool(mass, mean, cov, det, occ, coast, label):
+    """Stable sort of the pool's arrays (views of its first n entries) by label, in place."""
+    order = np.argsort(label, kind="mergesort")
+    for i in range(len(order)):
+        if order[i] != i:
+            break
+    else:
+        return
+    mass[:] = mass[order]
+    mean[:] = mean[order]
+    cov[:] = cov[order]
+    det[:] = det[order]
+    occ[:] = occ[order]
+    coast[:] = coast[order]
+    label[:] = label[order]
+
+
+@njit
+def _count_in_place(detection, age, hits, coast, used, slots, row, col, p_hit, dt):
+    """`GaussianMixturePMB._count_detections` on the slot arrays, in place."""
+    detection[:] = -1
+    for e in range(len(p_hit)):
+        if p_hit[e] > 0.5:
+            detection[slots[row[e]]] = col[e]
+    for i in range(len(used)):
+        hit = detection[i] >= 0
+        if used[i]:
+            age[i] += 1
+            if not hit:
+                coast[i] += dt
+        if hit:
+            hits[i] += 1
+            coast[i] = 0.0
+
+
+@njit
+def _confirm_in_place(used, age, hits, label, window, needed):
+    """`GaussianMixturePMB._confirm_or_delete`: frees the doomed slots in place and returns
+    which components are kept."""
+    doomed = np.zeros(len(used), dtype=np.bool_)
+    any_doomed = False
+    for i in range(len(used)):
+        if used[i] and hits[i] + max(window - age[i], 0) < needed:
+            doomed[i] = True
+            used[i] = False
+            any_doomed = True
+    keep = np.ones(len(label), dtype=np.bool_)
+    if any_doomed:
+        for k in range(len(label)):
+            if label[k] >= 0 and doomed[label[k]]:
+                keep[k] = False
+    return keep
+
+
+@njit
+def _cap_in_place(mass, label, L):
+    """`GaussianMixturePMB._cap_existence` in place: an object whose masses sum above 1
+    (rounding) has them scaled by 1 / r."""
+    r = np.zeros(L)
+    for k in range(len(label)):
+        if label[k] >= 0:
+            r[label[k]] += mass[k]
+    for k in range(len(label)):
+        i = label[k]
+        if i >= 0 and r[i] > 1.0:
+            mass[k] *= 1.0 / max(r[i], 1e-300)
 
 
 @njit
