@@ -517,16 +517,8 @@ class GaussianMixturePMB:
         Poisson part."""
         limit = self.config.max_labels
         L = len(self.slot_used)
-        lab = label >= 0
-        r_old = np.bincount(label[lab], weights=mass[lab], minlength=L)
-        born = newborn >= 0
-        r_new = np.bincount(newborn[born], weights=mass[born], minlength=M)
-        old = np.flatnonzero(self.slot_used)
-        new = np.flatnonzero(r_new > 0)
-        r_all = np.concatenate([r_old[old], r_new[new]])
-        eligible = r_all >= self.config.label_min_existence
-        ranked = np.argsort(-r_all, kind="stable")
-        ranked = ranked[eligible[ranked]]
+        old, new, r_all, ranked = _rank_bernoullis(label, mass, newborn, self.slot_used, M,
+                                                   self.config.label_min_existence)
         if limit and len(ranked) > limit:
             lost = r_all[ranked[limit:]]
             self._warn_once("labels", (
@@ -537,31 +529,22 @@ class GaussianMixturePMB:
                 f"report_existence) were recycled into the Poisson part and lose their tracks; "
                 f"set max_labels = 0 to let labels grow with the scene (reported once)"))
             ranked = ranked[:limit]
-        keep_old = np.zeros(len(old), dtype=bool)
-        keep_old[ranked[ranked < len(old)]] = True
-        keep_new = ranked[ranked >= len(old)] - len(old)
-        keep_new.sort()
+        keep_old, keep_new = _split_ranked(ranked, len(old))
 
         dropped = old[~keep_old]
         if len(dropped):
             self.slot_used[dropped] = False
             gone = np.zeros(L, dtype=bool)
             gone[dropped] = True
-            label = np.where(lab & gone[np.maximum(label, 0)], -1, label)
+            label = np.where((label >= 0) & gone[np.maximum(label, 0)], -1, label)
         if len(keep_new):
             self._reserve_slots(int(self.slot_used.sum()) + len(keep_new))
-            free = np.flatnonzero(~self.slot_used)[:len(keep_new)]
-            self.slot_used[free] = True
-            slot_of_meas = np.full(M, -1, dtype=np.int64)
-            slot_of_meas[new[keep_new]] = free
-            label = np.where(born, slot_of_meas[np.maximum(newborn, 0)], label)
-            self.slot_serial[free] = self._next_serial + np.arange(len(free))
-            self._next_serial += len(free)
-            self.slot_age[free] = 1
-            self.slot_hits[free] = 1
-            self.slot_coast[free] = 0.0
-            self.slot_detection[free] = new[keep_new]
-            self.slot_class[free] = 0 if classes is None else classes[new[keep_new]]
+            label = _open_slots(label, newborn, new[keep_new], M, self._next_serial,
+                                self.slot_used, self.slot_serial, self.slot_age,
+                                self.slot_hits, self.slot_coast, self.slot_detection,
+                                self.slot_class, np.zeros(0, dtype=np.int64)
+                                if classes is None else classes)
+            self._next_serial += len(keep_new)
         return label
 
     def _merge(self, mass, mean, cov, det, occ, coast, label):
@@ -592,6 +575,73 @@ class GaussianMixturePMB:
         n = self.n
         _cap_in_place(self.mass[:n], self.label[:n], len(self.slot_used))
 
+
+
+@njit
+def _rank_bernoullis(label, mass, newborn, used, M, min_existence):
+    """(used slots, measurements with a newborn Bernoulli, the existence of each of those
+    in that order, their indices strongest first among those at min_existence or above)."""
+    r_old = np.zeros(len(used))
+    r_new = np.zeros(M)
+    for k in range(len(label)):
+        if label[k] >= 0:
+            r_old[label[k]] += mass[k]
+        if newborn[k] >= 0:
+            r_new[newborn[k]] += mass[k]
+    old = np.flatnonzero(used)
+    new = np.flatnonzero(r_new > 0)
+    r_all = np.concatenate((r_old[old], r_new[new]))
+    ranked = np.argsort(-r_all, kind="mergesort")
+    return old, new, r_all, ranked[r_all[ranked] >= min_existence]
+
+
+@njit
+def _split_ranked(ranked, n_old):
+    """Which of the n_old existing Bernoullis keep their label, and the new ones that get
+    one (indices among the new, ascending)."""
+    keep_old = np.zeros(n_old, dtype=np.bool_)
+    count = 0
+    for i in ranked:
+        if i < n_old:
+            keep_old[i] = True
+        else:
+            count += 1
+    keep_new = np.empty(count, np.int64)
+    count = 0
+    for i in ranked:
+        if i >= n_old:
+            keep_new[count] = i - n_old
+            count += 1
+    keep_new.sort()
+    return keep_old, keep_new
+
+
+@njit
+def _open_slots(label, newborn, meas, M, serial0, used, serial, age, hits, coast, detection,
+                cls, classes):
+    """Give the newborn Bernoullis of measurements `meas` the first free slots (in place on
+    the slot arrays): serials from serial0, one hit at age 1, their measurement's class
+    (`classes`, empty: one class). Returns the components' labels."""
+    slot_of_meas = np.full(M, -1, dtype=np.int64)
+    i = 0
+    for s in range(len(used)):
+        if i == len(meas):
+            break
+        if not used[s]:
+            used[s] = True
+            slot_of_meas[meas[i]] = s
+            serial[s] = serial0 + i
+            age[s] = 1
+            hits[s] = 1
+            coast[s] = 0.0
+            detection[s] = meas[i]
+            cls[s] = classes[meas[i]] if len(classes) else 0
+            i += 1
+    out = label.copy()
+    for k in range(len(label)):
+        if newborn[k] >= 0:
+            out[k] = slot_of_meas[newborn[k]]
+    return out
 
 
 @njit
