@@ -331,11 +331,8 @@ class GaussianMixturePMB:
             terms.seen_hidden, 0.0, 1.0)
         # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
         # sorted by label, so each object's sums are sums over one contiguous run
-        slots = np.flatnonzero(self.slot_used)
+        slots, rows = _object_rows(label, self.slot_used)
         A = len(slots)
-        row_of_slot = np.full(L, A, dtype=np.int64)
-        row_of_slot[slots] = np.arange(A)
-        rows = np.where(label >= 0, row_of_slot[np.maximum(label, 0)], A)
 
         # hit weights l_kj of the pairs (component pk, detection pj) that can associate
         pk, pj, log_hit, cand = self._pairs(mean, cov, z, observed, rows, A)
@@ -352,18 +349,13 @@ class GaussianMixturePMB:
             pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass, det, o_seen,
             v, seen_hidden, pd, bool(seen_hidden.any()), label, self.slot_class,
             np.zeros(0, dtype=np.int64) if classes is None else classes)
-        mine = edge_of_pair >= 0
 
-        r_obj, miss_mass, hidden_mass = _object_sums(rows, A + 1, mass, miss,
-                                                     det * occ * (1.0 - v + v * q))
-        self.slot_hidden[:] = 0.0
-        self.slot_hidden[slots] = hidden_mass[:A] / np.maximum(miss_mass[:A], 1e-300)
-        r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
+        miss_obj = _object_misses(rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden)
         W, H = self.image_size
-        size = np.maximum((z[:, :, 1] - z[:, :, 0]).prod(axis=1), 1.0)
-        clutter = c.clutter_rate / (W * H * size) * np.clip(scores, c.score_floor, 1.0) ** (
-            -c.clutter_score_power) * (1.0 - c.occludability * seen_hidden)
-        w_new = clutter + poisson_hit
+        # (numpy's power, not libm's: they differ in the last bit)
+        score_term = np.clip(scores, c.score_floor, 1.0) ** (-c.clutter_score_power)
+        w_new = _new_weights(z, score_term, seen_hidden, poisson_hit, c.clutter_rate, W * H,
+                             c.occludability)
 
         # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
         # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
@@ -375,23 +367,11 @@ class GaussianMixturePMB:
         self.iterations = marg.iterations
         self._count_detections(slots, e_row[strong], e_col[strong], marg.p_hit)
 
-        hit_factor = (marg.p_new / w_new)[pj]
-        edge_factor = np.zeros(len(L_edge))
-        edge_factor[strong] = marg.p_hit / L_edge[strong]
-        hit_factor[mine] = edge_factor[edge_of_pair[mine]]
-        miss_factor = np.append(marg.p_miss / miss_obj, 1.0)
         # children: one miss child per component, then one hit child per pair
-        children = np.concatenate([mass * miss * miss_factor[rows], hit * hit_factor])
-
-        keep = self._select(children)
-        missed = keep < n
-        pair = np.where(missed, 0, keep - n)
-        parent = np.where(missed, keep, pk[pair] if len(pk) else 0)
-        j = np.where(missed, -1, pj[pair] if len(pj) else 0)
-        # in the order of the parents, a miss child before its hit children
-        order = np.argsort(parent * (M + 1) + j + 1, kind="stable")
-        keep, parent, j = keep[order], parent[order], j[order]
-        new_mass = children[keep]
+        children = _children(mass, miss, rows, hit, pj, edge_of_pair, strong, marg.p_hit,
+                             L_edge, marg.p_new, w_new, marg.p_miss, miss_obj)
+        keep, parent, j, new_mass = _child_parents(self._select(children), n, pk, pj, M,
+                                                   children)
         if c.max_components_per_object:
             trim = self._trim_objects(new_mass, label[parent], j)
             keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
@@ -846,14 +826,89 @@ def _object_moments(label, mass, mean, cov, L):
 
 
 @njit
-def _object_sums(rows, R, mass, miss, hidden):
-    """Per object row: r = sum w_k, sum w_k miss_k and sum w_k hidden_k."""
-    r, miss_mass, hidden_mass = np.zeros(R), np.zeros(R), np.zeros(R)
+def _object_rows(label, used):
+    """(the used slots, each component's object row): rows 0..A-1 are the used slots in
+    order, row A the Poisson part."""
+    slots = np.flatnonzero(used)
+    A = len(slots)
+    row_of_slot = np.full(len(used), A, dtype=np.int64)
+    for a in range(A):
+        row_of_slot[slots[a]] = a
+    rows = np.empty(len(label), dtype=np.int64)
+    for k in range(len(label)):
+        rows[k] = row_of_slot[label[k]] if label[k] >= 0 else A
+    return slots, rows
+
+
+@njit
+def _object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden):
+    """miss_i = 1 - r_i + sum_{k in i} w_k miss_k of each object row (floored at 1e-300),
+    and, in place, each slot's probability that occlusion caused a miss:
+    sum w_k d_k o_k (1 - v_k + v_k q_k) / sum w_k miss_k."""
+    r, miss_mass, hidden_mass = np.zeros(A + 1), np.zeros(A + 1), np.zeros(A + 1)
     for k in range(len(rows)):
         r[rows[k]] += mass[k]
         miss_mass[rows[k]] += mass[k] * miss[k]
-        hidden_mass[rows[k]] += mass[k] * hidden[k]
-    return r, miss_mass, hidden_mass
+        hidden_mass[rows[k]] += mass[k] * (det[k] * occ[k] * (1.0 - v[k] + v[k] * q[k]))
+    slot_hidden[:] = 0.0
+    miss_obj = np.empty(A)
+    for a in range(A):
+        slot_hidden[slots[a]] = hidden_mass[a] / max(miss_mass[a], 1e-300)
+        miss_obj[a] = max(1.0 - r[a] + miss_mass[a], 1e-300)
+    return miss_obj
+
+
+@njit
+def _new_weights(z, score_term, seen_hidden, poisson_hit, rate, area, occludability):
+    """L_0j = kappa p_F(z_j) (1 - o h_j) + the Poisson part's hit weights, with kappa p_F =
+    rate / (W H w h) / score^power (`config.TrackerConfig`), W H the image's `area` and
+    score^-power given as `score_term`."""
+    w_new = np.empty(len(z))
+    for j in range(len(z)):
+        size = max((z[j, 0, 1] - z[j, 0, 0]) * (z[j, 1, 1] - z[j, 1, 0]), 1.0)
+        w_new[j] = (rate / (area * size) * score_term[j]
+                    * (1.0 - occludability * seen_hidden[j]) + poisson_hit[j])
+    return w_new
+
+
+@njit
+def _children(mass, miss, rows, hit, pj, edge_of_pair, strong, p_hit, L_edge, p_new, w_new,
+              p_miss, miss_obj):
+    """The children's masses: the miss child of each component, w_k miss_k p_miss_i / miss_i
+    (the Poisson part's: w_k miss_k), then the hit child of each pair, l_kj p_hit_ij / L_ij
+    (Poisson: l_kj p_new_j / L_0j). p_hit is given on the `strong` edges, in order."""
+    n, P, A = len(mass), len(hit), len(miss_obj)
+    edge_factor = np.zeros(len(L_edge))
+    s = 0
+    for e in range(len(L_edge)):
+        if strong[e]:
+            edge_factor[e] = p_hit[s] / L_edge[e]
+            s += 1
+    out = np.empty(n + P)
+    for k in range(n):
+        factor = p_miss[rows[k]] / miss_obj[rows[k]] if rows[k] < A else 1.0
+        out[k] = mass[k] * miss[k] * factor
+    for p in range(P):
+        e = edge_of_pair[p]
+        out[n + p] = hit[p] * (edge_factor[e] if e >= 0 else p_new[pj[p]] / w_new[pj[p]])
+    return out
+
+
+@njit
+def _child_parents(keep, n, pk, pj, M, children):
+    """(kept children, their parent component, their detection (-1: miss), their mass) in
+    the order of the parents, a miss child before its hit children."""
+    K = len(keep)
+    parent, j, key = np.empty(K, np.int64), np.empty(K, np.int64), np.empty(K, np.int64)
+    for c in range(K):
+        if keep[c] < n:
+            parent[c], j[c] = keep[c], -1
+        else:
+            parent[c], j[c] = pk[keep[c] - n], pj[keep[c] - n]
+        key[c] = parent[c] * (M + 1) + j[c] + 1
+    order = np.argsort(key, kind="mergesort")
+    keep, parent, j = keep[order], parent[order], j[order]
+    return keep, parent, j, children[keep]
 
 
 @njit
