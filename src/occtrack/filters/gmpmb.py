@@ -414,7 +414,7 @@ class GaussianMixturePMB:
         c = self.config
         zhat, S = self.measurement.innovation(mean, cov)
         if not c.gating or n * M <= DENSE_PAIRS:
-            pk, pj = np.repeat(np.arange(n), M), np.tile(np.arange(M), n)
+            pk, pj = _all_pairs(n, M)
             return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), None
         gates = self.measurement.gates(zhat, S, c.gate_sigmas)
         first = np.ones(n, dtype=bool)
@@ -823,6 +823,17 @@ def _object_moments(label, mass, mean, cov, L):
             for a in range(2):
                 var[i, a] += share * (cov[k, a, 0, 0] + (mean[k, a, 0] - means[i, a, 0]) ** 2)
     return r, means, np.sqrt(var)
+
+
+@njit
+def _all_pairs(n, M):
+    """Every (component, detection) pair, component-major: (pk, pj)."""
+    pk, pj = np.empty(n * M, np.int64), np.empty(n * M, np.int64)
+    for k in range(n):
+        for j in range(M):
+            pk[k * M + j] = k
+            pj[k * M + j] = j
+    return pk, pj
 
 
 @njit

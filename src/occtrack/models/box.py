@@ -80,8 +80,8 @@ class BoxMeasurement:
         return self.noise_std(means)[:, None, None, None] ** 2 * np.eye(2)
 
     def predicted_edges(self, means: np.ndarray) -> np.ndarray:
-        """Each component's noise-free box edges, (K, 2, 2)."""
-        return means @ self.H.T
+        """Each component's noise-free box edges, (K, 2, 2): H m (`_edges`)."""
+        return _edges(means)
 
     def observed(self, z: np.ndarray) -> np.ndarray:
         """Which edges of measurements z (M, 2, 2) were measured (not on the border)."""
@@ -232,6 +232,17 @@ def _update_pairs(means, covs, z, observed, edge_noise, new_means, new_covs):
                              - w[a] * g1[b] + g0[a] * h0[b] + g1[a] * h1[b])
                     new_covs[i, axis, a, b] = value
                     new_covs[i, axis, b, a] = value
+
+
+@njit
+def _edges(means):
+    """H m per component and axis, H = [[1, 0, -1], [1, 0, 1]]: low edge c - s, high c + s."""
+    out = np.empty((len(means), 2, 2))
+    for k in range(len(means)):
+        for axis in range(2):
+            out[k, axis, 0] = means[k, axis, 0] - means[k, axis, 2]
+            out[k, axis, 1] = means[k, axis, 0] + means[k, axis, 2]
+    return out
 
 
 @njit
