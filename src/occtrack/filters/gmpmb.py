@@ -319,8 +319,8 @@ class GaussianMixturePMB:
         # occlusion explains the misses of confirmed objects only: a newborn's broad density
         # overlaps the detections around it, and a miss it could blame on them would keep a
         # false track alive; the others are treated as not occludable (o = 0)
-        established, occ, r_slot, within = _occludable(
-            label, mass, self.occ[:n], self.confirmed(), L)
+        established, occ, o_seen, r_slot, within = _occludable(
+            label, mass, self.occ[:n], self.confirmed(), L, c.occludability)
         ctx = OcclusionContext(means=mean, covs=cov, weights=within, owner=label,
                                existence=r_slot, measurements=z,
                                measurement_model=self.measurement)
@@ -335,16 +335,11 @@ class GaussianMixturePMB:
         A = len(slots)
 
         # hit weights l_kj of the pairs (component pk, detection pj) that can associate
-        pk, pj, log_hit, cand = self._pairs(mean, cov, z, observed, rows, A)
-        if cand is None:  # every (object, detection) pair is a candidate edge
-            cand_row, cand_col = np.divmod(np.arange(A * M), max(M, 1))
-            cand_of_pair = rows[pk] * M + pj
-        else:
-            cand_row, cand_col, cand_of_pair = cand
-        # a source not yet confirmed is weighed like clutter, with the stationary o: were it
-        # taken as never occludable, a detection in a crowd would start a new track more
-        # easily than it is called clutter
-        o_seen = np.where(established, occ, c.occludability)
+        pk, pj, log_hit, (cand_row, cand_col, cand_of_pair) = self._pairs(
+            mean, cov, z, observed, rows, A)
+        # o_seen: a source not yet confirmed is weighed like clutter, with the stationary o:
+        # were it taken as never occludable, a detection in a crowd would start a new track
+        # more easily than it is called clutter
         pk, pj, hit, edge_of_pair, poisson_hit, e_row, e_col, L_edge = _hit_edges(
             pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass, det, o_seen,
             v, seen_hidden, pd, bool(seen_hidden.any()), label, self.slot_class,
@@ -360,12 +355,12 @@ class GaussianMixturePMB:
         # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
         # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
         # such edges out (gating) splits a crowd's graph into the clusters that really compete
-        strong = (L_edge >= EDGE_FLOOR * miss_obj[e_row] * w_new[e_col]) if c.gating else (
-            np.ones(len(L_edge), dtype=bool))
-        marg = lbp_sparse(e_row[strong], e_col[strong], L_edge[strong], miss_obj, w_new,
-                          tol=c.lbp_tolerance, max_iter=c.lbp_max_iterations)
+        strong, s_row, s_col, s_L = _strong_edges(e_row, e_col, L_edge, miss_obj, w_new,
+                                                  EDGE_FLOOR if c.gating else 0.0)
+        marg = lbp_sparse(s_row, s_col, s_L, miss_obj, w_new, tol=c.lbp_tolerance,
+                          max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
-        self._count_detections(slots, e_row[strong], e_col[strong], marg.p_hit)
+        self._count_detections(slots, s_row, s_col, marg.p_hit)
 
         # children: one miss child per component, then one hit child per pair
         children = _children(mass, miss, rows, hit, pj, edge_of_pair, strong, marg.p_hit,
@@ -392,30 +387,34 @@ class GaussianMixturePMB:
             new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label)
         alive = self._confirm_or_delete(new_label)
 
-        k = int(alive.sum())
+        if not alive.all():
+            new_mass, new_mean, new_cov = new_mass[alive], new_mean[alive], new_cov[alive]
+            new_det, new_occ, new_coast = new_det[alive], new_occ[alive], new_coast[alive]
+            new_label = new_label[alive]
+        k = len(new_mass)
         self.n = 0  # (nothing of the old pool is kept)
         self._reserve(k)
         self.n = k
-        self.mass[:k], self.mean[:k], self.cov[:k] = (new_mass[alive], new_mean[alive],
-                                                       new_cov[alive])
-        self.det[:k], self.occ[:k] = np.clip(new_det[alive], 0, 1), np.clip(new_occ[alive], 0, 1)
-        self.coast[:k], self.label[:k] = new_coast[alive], new_label[alive]
+        self.mass[:k], self.mean[:k], self.cov[:k] = new_mass, new_mean, new_cov
+        self.det[:k], self.occ[:k] = np.clip(new_det, 0, 1), np.clip(new_occ, 0, 1)
+        self.coast[:k], self.label[:k] = new_coast, new_label
         self._cap_existence()
 
     def _pairs(self, mean: np.ndarray, cov: np.ndarray, z: np.ndarray, observed: np.ndarray,
                rows: np.ndarray, A: int):
         """The (component, detection) pairs that can associate and log p(z_j | x_k) on them:
-        (pk, pj, loglik, candidates). Small problems and `gating = false` list every pair
-        (candidates None: every (object, detection) pair may be an edge). Otherwise the pairs
+        (pk, pj, loglik, candidates). Small problems and `gating = false` list every pair,
+        and every (object, detection) pair is a candidate edge. Otherwise the pairs
         whose gates overlap: one gate per object row (the union of its components' gates, so
-        each object is looked up once), one per Poisson component; candidates are then the
-        (object row, detection) pairs found, (row, column, candidate of each listed pair)."""
+        each object is looked up once), one per Poisson component, and the candidates are
+        the (object row, detection) pairs found. Candidates are (row, column, candidate of each
+        listed pair)."""
         n, M = len(mean), len(z)
         c = self.config
         zhat, S = self.measurement.innovation(mean, cov)
         if not c.gating or n * M <= DENSE_PAIRS:
-            pk, pj = _all_pairs(n, M)
-            return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), None
+            pk, pj, cand = _all_pairs(n, M, rows, A)
+            return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), cand
         gates = self.measurement.gates(zhat, S, c.gate_sigmas)
         first = np.ones(n, dtype=bool)
         first[1:] = (rows[1:] != rows[:-1]) | (rows[1:] == A)
@@ -625,27 +624,29 @@ def _open_slots(label, newborn, meas, M, serial0, used, serial, age, hits, coast
 
 
 @njit
-def _occludable(label, mass, occ_all, confirmed, L):
-    """(established, o, r per slot, w_k / r of its object) of each component: occlusion is
-    for the components of confirmed objects (o = 0 for the others); the Poisson part's
-    components keep w_k."""
+def _occludable(label, mass, occ_all, confirmed, L, stationary):
+    """(established, o, o_seen, r per slot, w_k / r of its object) of each component:
+    occlusion is for the components of confirmed objects (o = 0 for the others; o_seen, the
+    o that weighs a detection's source, is the `stationary` occludability for them); the
+    Poisson part's components keep w_k."""
     n = len(label)
     r = np.zeros(L)
     for k in range(n):
         if label[k] >= 0:
             r[label[k]] += mass[k]
     established = np.zeros(n, dtype=np.bool_)
-    occ, within = np.zeros(n), np.empty(n)
+    occ, o_seen, within = np.zeros(n), np.full(n, stationary), np.empty(n)
     for k in range(n):
         i = label[k]
         if i >= 0:
             established[k] = confirmed[i]
             if confirmed[i]:
                 occ[k] = occ_all[k]
+                o_seen[k] = occ_all[k]
             within[k] = mass[k] / max(r[i], 1e-300)
         else:
             within[k] = mass[k]
-    return established, occ, r, within
+    return established, occ, o_seen, r, within
 
 
 @njit
@@ -826,14 +827,23 @@ def _object_moments(label, mass, mean, cov, L):
 
 
 @njit
-def _all_pairs(n, M):
-    """Every (component, detection) pair, component-major: (pk, pj)."""
+def _all_pairs(n, M, rows, A):
+    """Every (component, detection) pair, component-major (pk, pj), and every (object row,
+    detection) pair of the A object rows as a candidate edge: (row, column, candidate of each
+    pair; the Poisson part's pairs point past the A M candidates, where nothing reads)."""
     pk, pj = np.empty(n * M, np.int64), np.empty(n * M, np.int64)
+    cand_of_pair = np.empty(n * M, np.int64)
     for k in range(n):
         for j in range(M):
             pk[k * M + j] = k
             pj[k * M + j] = j
-    return pk, pj
+            cand_of_pair[k * M + j] = rows[k] * M + j
+    cand_row, cand_col = np.empty(A * M, np.int64), np.empty(A * M, np.int64)
+    for i in range(A):
+        for j in range(M):
+            cand_row[i * M + j] = i
+            cand_col[i * M + j] = j
+    return pk, pj, (cand_row, cand_col, cand_of_pair)
 
 
 @njit
@@ -880,6 +890,24 @@ def _new_weights(z, score_term, seen_hidden, poisson_hit, rate, area, occludabil
         w_new[j] = (rate / (area * size) * score_term[j]
                     * (1.0 - occludability * seen_hidden[j]) + poisson_hit[j])
     return w_new
+
+
+@njit
+def _strong_edges(row, col, L_edge, miss_obj, w_new, floor):
+    """The edges with L_ij >= floor miss_i w_new_j (floor 0: every edge): (mask, their rows,
+    columns and L_ij)."""
+    strong = np.empty(len(L_edge), dtype=np.bool_)
+    count = 0
+    for e in range(len(L_edge)):
+        strong[e] = floor == 0.0 or L_edge[e] >= floor * miss_obj[row[e]] * w_new[col[e]]
+        count += strong[e]
+    s_row, s_col, s_L = np.empty(count, np.int64), np.empty(count, np.int64), np.empty(count)
+    i = 0
+    for e in range(len(L_edge)):
+        if strong[e]:
+            s_row[i], s_col[i], s_L[i] = row[e], col[e], L_edge[e]
+            i += 1
+    return strong, s_row, s_col, s_L
 
 
 @njit
