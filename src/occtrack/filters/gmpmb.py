@@ -759,7 +759,9 @@ def _pool_cells(order, start, mass, mean, cov, det, occ, coast, label):
         for i in range(first[g], first[g + 1]):
             k = order[i]
             share = mass[k] / total
-            out_mean[g] += share * mean[k]
+            for b in range(B):
+                for r in range(d):
+                    out_mean[g, b, r] += share * mean[k, b, r]
             out_det[g] += share * det[k]
             out_occ[g] += share * occ[k]
             out_coast[g] += share * coast[k]
@@ -816,7 +818,9 @@ def _object_moments(label, mass, mean, cov, L):
         i = label[k]
         if i >= 0:
             share = mass[k] / max(r[i], 1e-300)
-            means[i] += share * mean[k]
+            for b in range(mean.shape[1]):
+                for c in range(mean.shape[2]):
+                    means[i, b, c] += share * mean[k, b, c]
     for k in range(len(label)):
         i = label[k]
         if i >= 0:
