@@ -69,6 +69,19 @@ def test_malformed_detection_line_is_named(tmp_path, capsys):
     assert not (tmp_path / "r.txt").exists()
 
 
+def test_an_empty_detection_file_gives_an_empty_result_and_says_so(tmp_path, capsys):
+    det = tmp_path / "det.txt"
+    det.write_text("")
+    out = tmp_path / "r.txt"
+    assert main(["track", str(det), "--image-size", "640x480", "--fps", "25", "-o",
+                 str(out)]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == (f"occtrack track: warning: {det} holds no detections, so the result "
+                            f"has no tracks\n")
+    assert captured.out.startswith("0 frames, 0 tracks")
+    assert out.read_text() == ""
+
+
 def test_image_size_is_required_without_seqinfo(tmp_path, capsys):
     det = tmp_path / "det.txt"
     det.write_text("1,-1,10,10,30,90,0.9\n")

@@ -88,6 +88,7 @@ class SparseMarginals:
     clusters: int = 0
 
 
+TINY = np.finfo(float).tiny  # weights are floored here, so that no ratio divides by zero
 CLUSTER_MIN_PAIRS = 256  # fewer pairs: one cluster, as the dense form would stop
 
 
@@ -111,9 +112,8 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
     rows = np.asarray(rows, dtype=np.int64)
     cols = np.asarray(cols, dtype=np.int64)
     w_hit = np.asarray(w_hit, dtype=float)
-    tiny = np.finfo(float).tiny
-    w_miss = np.maximum(np.asarray(w_miss, dtype=float), tiny)
-    w_new = np.maximum(np.asarray(w_new, dtype=float), tiny)
+    w_miss = np.maximum(np.asarray(w_miss, dtype=float), TINY)
+    w_new = np.maximum(np.asarray(w_new, dtype=float), TINY)
     n, m, E = len(w_miss), len(w_new), len(rows)
     if E == 0:
         return SparseMarginals(np.zeros(0), np.ones(n), np.ones(m), 0, 0)
@@ -127,15 +127,35 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
     grouped, iterations = _iterate_clusters(rows[order], cols[order], ratio[order],
                                             w_new[cols[order]], sizes[sizes > 0], n, m, tol,
                                             max_iter)
-    nu = np.empty(E)
-    nu[order] = grouped
-    s = ratio * nu
-    total = np.bincount(rows, weights=s, minlength=n)
-    p_hit = s / (1.0 + total[rows])
-    p_miss = 1.0 / (1.0 + total)
-    mu = ratio / (1.0 + total[rows] - s)
-    p_new = w_new / (w_new + np.bincount(cols, weights=mu, minlength=m))
+    p_hit, p_miss, p_new = _marginals(rows, cols, ratio, grouped, order, w_new, n)
     return SparseMarginals(p_hit, p_miss, p_new, iterations, count)
+
+
+@njit
+def _marginals(rows, cols, ratio, grouped, order, w_new, n):
+    """p_hit, p_miss and p_new from the converged messages nu (`grouped`, in the order
+    `order` of the edges): with s_e = ratio_e nu_e and S_i the sum of s over row i,
+    p_hit = s / (1 + S_i), p_miss = 1 / (1 + S_i), and p_new_j = w_new_j / (w_new_j + sum of
+    mu_e = ratio_e / (1 + S_i - s_e) over column j)."""
+    E, m = len(rows), len(w_new)
+    s = np.empty(E)
+    for i in range(E):
+        s[order[i]] = ratio[order[i]] * grouped[i]
+    total = np.zeros(n)
+    for e in range(E):
+        total[rows[e]] += s[e]
+    p_hit = np.empty(E)
+    to_new = np.zeros(m)
+    for e in range(E):
+        p_hit[e] = s[e] / (1.0 + total[rows[e]])
+        to_new[cols[e]] += ratio[e] / (1.0 + total[rows[e]] - s[e])
+    p_miss = np.empty(n)
+    for i in range(n):
+        p_miss[i] = 1.0 / (1.0 + total[i])
+    p_new = np.empty(m)
+    for j in range(m):
+        p_new[j] = w_new[j] / (w_new[j] + to_new[j])
+    return p_hit, p_miss, p_new
 
 
 @njit

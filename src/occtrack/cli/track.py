@@ -159,6 +159,9 @@ def run(args: argparse.Namespace) -> int:
         lenient=args.lenient, max_gap_frames=gap, num_frames=length)
     if warning:
         print(f"occtrack track: warning: {warning}", file=sys.stderr)
+    if len(detections.frame) == 0:
+        print(f"occtrack track: warning: {args.detections} holds no detections, so the "
+              f"result has no tracks", file=sys.stderr)
     frames = max(length or 0, detections.num_frames)
     start = time.perf_counter()
     result = Tracker(config).run(detections, frames, quiet=args.quiet,

@@ -319,85 +319,54 @@ class GaussianMixturePMB:
         # occlusion explains the misses of confirmed objects only: a newborn's broad density
         # overlaps the detections around it, and a miss it could blame on them would keep a
         # false track alive; the others are treated as not occludable (o = 0)
-        established = np.where(label >= 0, self.confirmed()[np.maximum(label, 0)], False)
-        occ = np.where(established, self.occ[:n], 0.0)
-
-        r_slot = np.bincount(label[label >= 0], weights=mass[label >= 0], minlength=L)
-        within = np.where(label >= 0, mass / np.maximum(r_slot[label], 1e-300), mass)
+        established, occ, o_seen, r_slot, within = _occludable(
+            label, mass, self.occ[:n], self.confirmed(), L, c.occludability)
         ctx = OcclusionContext(means=mean, covs=cov, weights=within, owner=label,
                                existence=r_slot, measurements=z,
                                measurement_model=self.measurement)
         terms = self.occlusion.terms(ctx)
-        v = np.clip(terms.visible, 0.0, 1.0)
-        q = np.clip(terms.hidden, 0.0, 1.0)
-        pd = det * (1.0 - occ + occ * v)
-        miss = 1.0 - pd + det * occ * v * q
+        v, q, pd, miss = _miss_terms(det, occ, terms.visible, terms.hidden)
 
         seen_hidden = np.zeros(M) if terms.seen_hidden is None else np.clip(
             terms.seen_hidden, 0.0, 1.0)
         # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
         # sorted by label, so each object's sums are sums over one contiguous run
-        slots = np.flatnonzero(self.slot_used)
+        slots, rows = _object_rows(label, self.slot_used)
         A = len(slots)
-        row_of_slot = np.full(L, A, dtype=np.int64)
-        row_of_slot[slots] = np.arange(A)
-        rows = np.where(label >= 0, row_of_slot[np.maximum(label, 0)], A)
 
         # hit weights l_kj of the pairs (component pk, detection pj) that can associate
-        pk, pj, log_hit, cand = self._pairs(mean, cov, z, observed, rows, A)
-        if cand is None:  # every (object, detection) pair is a candidate edge
-            cand_row, cand_col = np.divmod(np.arange(A * M), max(M, 1))
-            cand_of_pair = rows[pk] * M + pj
-        else:
-            cand_row, cand_col, cand_of_pair = cand
-        # a source not yet confirmed is weighed like clutter, with the stationary o: were it
-        # taken as never occludable, a detection in a crowd would start a new track more
-        # easily than it is called clutter
-        o_seen = np.where(established, occ, c.occludability)
+        pk, pj, log_hit, (cand_row, cand_col, cand_of_pair) = self._pairs(
+            mean, cov, z, observed, rows, A)
+        # o_seen: a source not yet confirmed is weighed like clutter, with the stationary o:
+        # were it taken as never occludable, a detection in a crowd would start a new track
+        # more easily than it is called clutter
         pk, pj, hit, edge_of_pair, poisson_hit, e_row, e_col, L_edge = _hit_edges(
             pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass, det, o_seen,
             v, seen_hidden, pd, bool(seen_hidden.any()), label, self.slot_class,
             np.zeros(0, dtype=np.int64) if classes is None else classes)
-        mine = edge_of_pair >= 0
 
-        r_obj, miss_mass, hidden_mass = _object_sums(rows, A + 1, mass, miss,
-                                                     det * occ * (1.0 - v + v * q))
-        self.slot_hidden[:] = 0.0
-        self.slot_hidden[slots] = hidden_mass[:A] / np.maximum(miss_mass[:A], 1e-300)
-        r_obj, miss_obj = r_obj[:A], np.maximum(1.0 - r_obj[:A] + miss_mass[:A], 1e-300)
+        miss_obj = _object_misses(rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden)
         W, H = self.image_size
-        size = np.maximum((z[:, :, 1] - z[:, :, 0]).prod(axis=1), 1.0)
-        clutter = c.clutter_rate / (W * H * size) * np.clip(scores, c.score_floor, 1.0) ** (
-            -c.clutter_score_power) * (1.0 - c.occludability * seen_hidden)
-        w_new = clutter + poisson_hit
+        # (numpy's power, not libm's: they differ in the last bit)
+        score_term = np.clip(scores, c.score_floor, 1.0) ** (-c.clutter_score_power)
+        w_new = _new_weights(z, score_term, seen_hidden, poisson_hit, c.clutter_rate, W * H,
+                             c.occludability)
 
         # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
         # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
         # such edges out (gating) splits a crowd's graph into the clusters that really compete
-        strong = (L_edge >= EDGE_FLOOR * miss_obj[e_row] * w_new[e_col]) if c.gating else (
-            np.ones(len(L_edge), dtype=bool))
-        marg = lbp_sparse(e_row[strong], e_col[strong], L_edge[strong], miss_obj, w_new,
-                          tol=c.lbp_tolerance, max_iter=c.lbp_max_iterations)
+        strong, s_row, s_col, s_L = _strong_edges(e_row, e_col, L_edge, miss_obj, w_new,
+                                                  EDGE_FLOOR if c.gating else 0.0)
+        marg = lbp_sparse(s_row, s_col, s_L, miss_obj, w_new, tol=c.lbp_tolerance,
+                          max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
-        self._count_detections(slots, e_row[strong], e_col[strong], marg.p_hit)
+        self._count_detections(slots, s_row, s_col, marg.p_hit)
 
-        hit_factor = (marg.p_new / w_new)[pj]
-        edge_factor = np.zeros(len(L_edge))
-        edge_factor[strong] = marg.p_hit / L_edge[strong]
-        hit_factor[mine] = edge_factor[edge_of_pair[mine]]
-        miss_factor = np.append(marg.p_miss / miss_obj, 1.0)
         # children: one miss child per component, then one hit child per pair
-        children = np.concatenate([mass * miss * miss_factor[rows], hit * hit_factor])
-
-        keep = self._select(children)
-        missed = keep < n
-        pair = np.where(missed, 0, keep - n)
-        parent = np.where(missed, keep, pk[pair] if len(pk) else 0)
-        j = np.where(missed, -1, pj[pair] if len(pj) else 0)
-        # in the order of the parents, a miss child before its hit children
-        order = np.argsort(parent * (M + 1) + j + 1, kind="stable")
-        keep, parent, j = keep[order], parent[order], j[order]
-        new_mass = children[keep]
+        children = _children(mass, miss, rows, hit, pj, edge_of_pair, strong, marg.p_hit,
+                             L_edge, marg.p_new, w_new, marg.p_miss, miss_obj)
+        keep, parent, j, new_mass = _child_parents(self._select(children), n, pk, pj, M,
+                                                   children)
         if c.max_components_per_object:
             trim = self._trim_objects(new_mass, label[parent], j)
             keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
@@ -418,30 +387,34 @@ class GaussianMixturePMB:
             new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label)
         alive = self._confirm_or_delete(new_label)
 
-        k = int(alive.sum())
+        if not alive.all():
+            new_mass, new_mean, new_cov = new_mass[alive], new_mean[alive], new_cov[alive]
+            new_det, new_occ, new_coast = new_det[alive], new_occ[alive], new_coast[alive]
+            new_label = new_label[alive]
+        k = len(new_mass)
         self.n = 0  # (nothing of the old pool is kept)
         self._reserve(k)
         self.n = k
-        self.mass[:k], self.mean[:k], self.cov[:k] = (new_mass[alive], new_mean[alive],
-                                                       new_cov[alive])
-        self.det[:k], self.occ[:k] = np.clip(new_det[alive], 0, 1), np.clip(new_occ[alive], 0, 1)
-        self.coast[:k], self.label[:k] = new_coast[alive], new_label[alive]
+        self.mass[:k], self.mean[:k], self.cov[:k] = new_mass, new_mean, new_cov
+        self.det[:k], self.occ[:k] = np.clip(new_det, 0, 1), np.clip(new_occ, 0, 1)
+        self.coast[:k], self.label[:k] = new_coast, new_label
         self._cap_existence()
 
     def _pairs(self, mean: np.ndarray, cov: np.ndarray, z: np.ndarray, observed: np.ndarray,
                rows: np.ndarray, A: int):
         """The (component, detection) pairs that can associate and log p(z_j | x_k) on them:
-        (pk, pj, loglik, candidates). Small problems and `gating = false` list every pair
-        (candidates None: every (object, detection) pair may be an edge). Otherwise the pairs
+        (pk, pj, loglik, candidates). Small problems and `gating = false` list every pair,
+        and every (object, detection) pair is a candidate edge. Otherwise the pairs
         whose gates overlap: one gate per object row (the union of its components' gates, so
-        each object is looked up once), one per Poisson component; candidates are then the
-        (object row, detection) pairs found, (row, column, candidate of each listed pair)."""
+        each object is looked up once), one per Poisson component, and the candidates are
+        the (object row, detection) pairs found. Candidates are (row, column, candidate of each
+        listed pair)."""
         n, M = len(mean), len(z)
         c = self.config
         zhat, S = self.measurement.innovation(mean, cov)
         if not c.gating or n * M <= DENSE_PAIRS:
-            pk, pj = np.repeat(np.arange(n), M), np.tile(np.arange(M), n)
-            return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), None
+            pk, pj, cand = _all_pairs(n, M, rows, A)
+            return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), cand
         gates = self.measurement.gates(zhat, S, c.gate_sigmas)
         first = np.ones(n, dtype=bool)
         first[1:] = (rows[1:] != rows[:-1]) | (rows[1:] == A)
@@ -468,15 +441,8 @@ class GaussianMixturePMB:
         """Per-slot bookkeeping of this step's association: an object (row of `slots`) took
         detection j when p_hit_ij > 1/2 (at most one j can); p_hit is given on the pairs
         (row, col)."""
-        self.slot_detection[:] = -1
-        took = p_hit > 0.5
-        self.slot_detection[slots[row[took]]] = col[took]
-        used = self.slot_used
-        hit = self.slot_detection >= 0
-        self.slot_age[used] += 1
-        self.slot_hits[hit] += 1
-        self.slot_coast[used & ~hit] += self.dt
-        self.slot_coast[hit] = 0.0
+        _count_in_place(self.slot_detection, self.slot_age, self.slot_hits, self.slot_coast,
+                        self.slot_used, slots, row, col, p_hit, self.dt)
 
     def _confirm_or_delete(self, label: np.ndarray) -> np.ndarray:
         """Delete the Bernoullis that can no longer be detected in `confirm_hits` of their
@@ -484,21 +450,14 @@ class GaussianMixturePMB:
         repeats for a frame or two starts one, and it must not live on. Returns the mask of
         components kept."""
         c = self.config
-        left = np.maximum(c.confirm_window - self.slot_age, 0)
-        doomed = self.slot_used & (self.slot_hits + left < c.confirm_hits)
-        if not doomed.any():
-            return np.ones(len(label), dtype=bool)
-        self.slot_used[doomed] = False
-        return ~((label >= 0) & doomed[np.maximum(label, 0)])
+        return _confirm_in_place(self.slot_used, self.slot_age, self.slot_hits, label,
+                                 c.confirm_window, c.confirm_hits)
 
     def _sort_by_label(self) -> None:
         """Order the pool by label, Poisson part first (births arrive at the end)."""
         n = self.n
-        order = np.argsort(self.label[:n], kind="stable")
-        if (order == np.arange(n)).all():
-            return
-        for arr in (self.mass, self.mean, self.cov, self.det, self.occ, self.coast, self.label):
-            arr[:n] = arr[:n][order]
+        _sort_pool(self.mass[:n], self.mean[:n], self.cov[:n], self.det[:n], self.occ[:n],
+                   self.coast[:n], self.label[:n])
 
     def _select(self, flat: np.ndarray) -> np.ndarray:
         """Indices (sorted) of the children above the pruning mass; under a hard `capacity`
@@ -537,16 +496,8 @@ class GaussianMixturePMB:
         Poisson part."""
         limit = self.config.max_labels
         L = len(self.slot_used)
-        lab = label >= 0
-        r_old = np.bincount(label[lab], weights=mass[lab], minlength=L)
-        born = newborn >= 0
-        r_new = np.bincount(newborn[born], weights=mass[born], minlength=M)
-        old = np.flatnonzero(self.slot_used)
-        new = np.flatnonzero(r_new > 0)
-        r_all = np.concatenate([r_old[old], r_new[new]])
-        eligible = r_all >= self.config.label_min_existence
-        ranked = np.argsort(-r_all, kind="stable")
-        ranked = ranked[eligible[ranked]]
+        old, new, r_all, ranked = _rank_bernoullis(label, mass, newborn, self.slot_used, M,
+                                                   self.config.label_min_existence)
         if limit and len(ranked) > limit:
             lost = r_all[ranked[limit:]]
             self._warn_once("labels", (
@@ -557,31 +508,22 @@ class GaussianMixturePMB:
                 f"report_existence) were recycled into the Poisson part and lose their tracks; "
                 f"set max_labels = 0 to let labels grow with the scene (reported once)"))
             ranked = ranked[:limit]
-        keep_old = np.zeros(len(old), dtype=bool)
-        keep_old[ranked[ranked < len(old)]] = True
-        keep_new = ranked[ranked >= len(old)] - len(old)
-        keep_new.sort()
+        keep_old, keep_new = _split_ranked(ranked, len(old))
 
         dropped = old[~keep_old]
         if len(dropped):
             self.slot_used[dropped] = False
             gone = np.zeros(L, dtype=bool)
             gone[dropped] = True
-            label = np.where(lab & gone[np.maximum(label, 0)], -1, label)
+            label = np.where((label >= 0) & gone[np.maximum(label, 0)], -1, label)
         if len(keep_new):
             self._reserve_slots(int(self.slot_used.sum()) + len(keep_new))
-            free = np.flatnonzero(~self.slot_used)[:len(keep_new)]
-            self.slot_used[free] = True
-            slot_of_meas = np.full(M, -1, dtype=np.int64)
-            slot_of_meas[new[keep_new]] = free
-            label = np.where(born, slot_of_meas[np.maximum(newborn, 0)], label)
-            self.slot_serial[free] = self._next_serial + np.arange(len(free))
-            self._next_serial += len(free)
-            self.slot_age[free] = 1
-            self.slot_hits[free] = 1
-            self.slot_coast[free] = 0.0
-            self.slot_detection[free] = new[keep_new]
-            self.slot_class[free] = 0 if classes is None else classes[new[keep_new]]
+            label = _open_slots(label, newborn, new[keep_new], M, self._next_serial,
+                                self.slot_used, self.slot_serial, self.slot_age,
+                                self.slot_hits, self.slot_coast, self.slot_detection,
+                                self.slot_class, np.zeros(0, dtype=np.int64)
+                                if classes is None else classes)
+            self._next_serial += len(keep_new)
         return label
 
     def _merge(self, mass, mean, cov, det, occ, coast, label):
@@ -610,13 +552,184 @@ class GaussianMixturePMB:
     def _cap_existence(self) -> None:
         """Guard against r exceeding 1 by rounding: scale such an object's masses down."""
         n = self.n
-        r = self.existence()
-        over = r > 1.0
-        if over.any():
-            lab = self.label[:n] >= 0
-            scale = np.where(over, 1.0 / np.maximum(r, 1e-300), 1.0)
-            self.mass[:n][lab] *= scale[self.label[:n][lab]]
+        _cap_in_place(self.mass[:n], self.label[:n], len(self.slot_used))
 
+
+
+@njit
+def _rank_bernoullis(label, mass, newborn, used, M, min_existence):
+    """(used slots, measurements with a newborn Bernoulli, the existence of each of those
+    in that order, their indices strongest first among those at min_existence or above)."""
+    r_old = np.zeros(len(used))
+    r_new = np.zeros(M)
+    for k in range(len(label)):
+        if label[k] >= 0:
+            r_old[label[k]] += mass[k]
+        if newborn[k] >= 0:
+            r_new[newborn[k]] += mass[k]
+    old = np.flatnonzero(used)
+    new = np.flatnonzero(r_new > 0)
+    r_all = np.concatenate((r_old[old], r_new[new]))
+    ranked = np.argsort(-r_all, kind="mergesort")
+    return old, new, r_all, ranked[r_all[ranked] >= min_existence]
+
+
+@njit
+def _split_ranked(ranked, n_old):
+    """Which of the n_old existing Bernoullis keep their label, and the new ones that get
+    one (indices among the new, ascending)."""
+    keep_old = np.zeros(n_old, dtype=np.bool_)
+    count = 0
+    for i in ranked:
+        if i < n_old:
+            keep_old[i] = True
+        else:
+            count += 1
+    keep_new = np.empty(count, np.int64)
+    count = 0
+    for i in ranked:
+        if i >= n_old:
+            keep_new[count] = i - n_old
+            count += 1
+    keep_new.sort()
+    return keep_old, keep_new
+
+
+@njit
+def _open_slots(label, newborn, meas, M, serial0, used, serial, age, hits, coast, detection,
+                cls, classes):
+    """Give the newborn Bernoullis of measurements `meas` the first free slots (in place on
+    the slot arrays): serials from serial0, one hit at age 1, their measurement's class
+    (`classes`, empty: one class). Returns the components' labels."""
+    slot_of_meas = np.full(M, -1, dtype=np.int64)
+    i = 0
+    for s in range(len(used)):
+        if i == len(meas):
+            break
+        if not used[s]:
+            used[s] = True
+            slot_of_meas[meas[i]] = s
+            serial[s] = serial0 + i
+            age[s] = 1
+            hits[s] = 1
+            coast[s] = 0.0
+            detection[s] = meas[i]
+            cls[s] = classes[meas[i]] if len(classes) else 0
+            i += 1
+    out = label.copy()
+    for k in range(len(label)):
+        if newborn[k] >= 0:
+            out[k] = slot_of_meas[newborn[k]]
+    return out
+
+
+@njit
+def _occludable(label, mass, occ_all, confirmed, L, stationary):
+    """(established, o, o_seen, r per slot, w_k / r of its object) of each component:
+    occlusion is for the components of confirmed objects (o = 0 for the others; o_seen, the
+    o that weighs a detection's source, is the `stationary` occludability for them); the
+    Poisson part's components keep w_k."""
+    n = len(label)
+    r = np.zeros(L)
+    for k in range(n):
+        if label[k] >= 0:
+            r[label[k]] += mass[k]
+    established = np.zeros(n, dtype=np.bool_)
+    occ, o_seen, within = np.zeros(n), np.full(n, stationary), np.empty(n)
+    for k in range(n):
+        i = label[k]
+        if i >= 0:
+            established[k] = confirmed[i]
+            if confirmed[i]:
+                occ[k] = occ_all[k]
+                o_seen[k] = occ_all[k]
+            within[k] = mass[k] / max(r[i], 1e-300)
+        else:
+            within[k] = mass[k]
+    return established, occ, o_seen, r, within
+
+
+@njit
+def _miss_terms(det, occ, visible, hidden):
+    """(v, q, P_D, miss) per component, v and q clipped to [0, 1]: P_D = d (1 - o + o v) and
+    miss = 1 - P_D + d o v q (the module docstring's occlusion line)."""
+    n = len(det)
+    v, q, pd, miss = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    for k in range(n):
+        v[k] = min(max(visible[k], 0.0), 1.0)
+        q[k] = min(max(hidden[k], 0.0), 1.0)
+        pd[k] = det[k] * (1.0 - occ[k] + occ[k] * v[k])
+        miss[k] = 1.0 - pd[k] + det[k] * occ[k] * v[k] * q[k]
+    return v, q, pd, miss
+
+
+@njit
+def _sort_pool(mass, mean, cov, det, occ, coast, label):
+    """Stable sort of the pool's arrays (views of its first n entries) by label, in place."""
+    order = np.argsort(label, kind="mergesort")
+    for i in range(len(order)):
+        if order[i] != i:
+            break
+    else:
+        return
+    mass[:] = mass[order]
+    mean[:] = mean[order]
+    cov[:] = cov[order]
+    det[:] = det[order]
+    occ[:] = occ[order]
+    coast[:] = coast[order]
+    label[:] = label[order]
+
+
+@njit
+def _count_in_place(detection, age, hits, coast, used, slots, row, col, p_hit, dt):
+    """`GaussianMixturePMB._count_detections` on the slot arrays, in place."""
+    detection[:] = -1
+    for e in range(len(p_hit)):
+        if p_hit[e] > 0.5:
+            detection[slots[row[e]]] = col[e]
+    for i in range(len(used)):
+        hit = detection[i] >= 0
+        if used[i]:
+            age[i] += 1
+            if not hit:
+                coast[i] += dt
+        if hit:
+            hits[i] += 1
+            coast[i] = 0.0
+
+
+@njit
+def _confirm_in_place(used, age, hits, label, window, needed):
+    """`GaussianMixturePMB._confirm_or_delete`: frees the doomed slots in place and returns
+    which components are kept."""
+    doomed = np.zeros(len(used), dtype=np.bool_)
+    any_doomed = False
+    for i in range(len(used)):
+        if used[i] and hits[i] + max(window - age[i], 0) < needed:
+            doomed[i] = True
+            used[i] = False
+            any_doomed = True
+    keep = np.ones(len(label), dtype=np.bool_)
+    if any_doomed:
+        for k in range(len(label)):
+            if label[k] >= 0 and doomed[label[k]]:
+                keep[k] = False
+    return keep
+
+
+@njit
+def _cap_in_place(mass, label, L):
+    """`GaussianMixturePMB._cap_existence` in place: an object whose masses sum above 1
+    (rounding) has them scaled by 1 / r."""
+    r = np.zeros(L)
+    for k in range(len(label)):
+        if label[k] >= 0:
+            r[label[k]] += mass[k]
+    for k in range(len(label)):
+        i = label[k]
+        if i >= 0 and r[i] > 1.0:
+            mass[k] *= 1.0 / max(r[i], 1e-300)
 
 
 @njit
@@ -646,7 +759,9 @@ def _pool_cells(order, start, mass, mean, cov, det, occ, coast, label):
         for i in range(first[g], first[g + 1]):
             k = order[i]
             share = mass[k] / total
-            out_mean[g] += share * mean[k]
+            for b in range(B):
+                for r in range(d):
+                    out_mean[g, b, r] += share * mean[k, b, r]
             out_det[g] += share * det[k]
             out_occ[g] += share * occ[k]
             out_coast[g] += share * coast[k]
@@ -703,7 +818,9 @@ def _object_moments(label, mass, mean, cov, L):
         i = label[k]
         if i >= 0:
             share = mass[k] / max(r[i], 1e-300)
-            means[i] += share * mean[k]
+            for b in range(mean.shape[1]):
+                for c in range(mean.shape[2]):
+                    means[i, b, c] += share * mean[k, b, c]
     for k in range(len(label)):
         i = label[k]
         if i >= 0:
@@ -714,14 +831,127 @@ def _object_moments(label, mass, mean, cov, L):
 
 
 @njit
-def _object_sums(rows, R, mass, miss, hidden):
-    """Per object row: r = sum w_k, sum w_k miss_k and sum w_k hidden_k."""
-    r, miss_mass, hidden_mass = np.zeros(R), np.zeros(R), np.zeros(R)
+def _all_pairs(n, M, rows, A):
+    """Every (component, detection) pair, component-major (pk, pj), and every (object row,
+    detection) pair of the A object rows as a candidate edge: (row, column, candidate of each
+    pair; the Poisson part's pairs point past the A M candidates, where nothing reads)."""
+    pk, pj = np.empty(n * M, np.int64), np.empty(n * M, np.int64)
+    cand_of_pair = np.empty(n * M, np.int64)
+    for k in range(n):
+        for j in range(M):
+            pk[k * M + j] = k
+            pj[k * M + j] = j
+            cand_of_pair[k * M + j] = rows[k] * M + j
+    cand_row, cand_col = np.empty(A * M, np.int64), np.empty(A * M, np.int64)
+    for i in range(A):
+        for j in range(M):
+            cand_row[i * M + j] = i
+            cand_col[i * M + j] = j
+    return pk, pj, (cand_row, cand_col, cand_of_pair)
+
+
+@njit
+def _object_rows(label, used):
+    """(the used slots, each component's object row): rows 0..A-1 are the used slots in
+    order, row A the Poisson part."""
+    slots = np.flatnonzero(used)
+    A = len(slots)
+    row_of_slot = np.full(len(used), A, dtype=np.int64)
+    for a in range(A):
+        row_of_slot[slots[a]] = a
+    rows = np.empty(len(label), dtype=np.int64)
+    for k in range(len(label)):
+        rows[k] = row_of_slot[label[k]] if label[k] >= 0 else A
+    return slots, rows
+
+
+@njit
+def _object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden):
+    """miss_i = 1 - r_i + sum_{k in i} w_k miss_k of each object row (floored at 1e-300),
+    and, in place, each slot's probability that occlusion caused a miss:
+    sum w_k d_k o_k (1 - v_k + v_k q_k) / sum w_k miss_k."""
+    r, miss_mass, hidden_mass = np.zeros(A + 1), np.zeros(A + 1), np.zeros(A + 1)
     for k in range(len(rows)):
         r[rows[k]] += mass[k]
         miss_mass[rows[k]] += mass[k] * miss[k]
-        hidden_mass[rows[k]] += mass[k] * hidden[k]
-    return r, miss_mass, hidden_mass
+        hidden_mass[rows[k]] += mass[k] * (det[k] * occ[k] * (1.0 - v[k] + v[k] * q[k]))
+    slot_hidden[:] = 0.0
+    miss_obj = np.empty(A)
+    for a in range(A):
+        slot_hidden[slots[a]] = hidden_mass[a] / max(miss_mass[a], 1e-300)
+        miss_obj[a] = max(1.0 - r[a] + miss_mass[a], 1e-300)
+    return miss_obj
+
+
+@njit
+def _new_weights(z, score_term, seen_hidden, poisson_hit, rate, area, occludability):
+    """L_0j = kappa p_F(z_j) (1 - o h_j) + the Poisson part's hit weights, with kappa p_F =
+    rate / (W H w h) / score^power (`config.TrackerConfig`), W H the image's `area` and
+    score^-power given as `score_term`."""
+    w_new = np.empty(len(z))
+    for j in range(len(z)):
+        size = max((z[j, 0, 1] - z[j, 0, 0]) * (z[j, 1, 1] - z[j, 1, 0]), 1.0)
+        w_new[j] = (rate / (area * size) * score_term[j]
+                    * (1.0 - occludability * seen_hidden[j]) + poisson_hit[j])
+    return w_new
+
+
+@njit
+def _strong_edges(row, col, L_edge, miss_obj, w_new, floor):
+    """The edges with L_ij >= floor miss_i w_new_j (floor 0: every edge): (mask, their rows,
+    columns and L_ij)."""
+    strong = np.empty(len(L_edge), dtype=np.bool_)
+    count = 0
+    for e in range(len(L_edge)):
+        strong[e] = floor == 0.0 or L_edge[e] >= floor * miss_obj[row[e]] * w_new[col[e]]
+        count += strong[e]
+    s_row, s_col, s_L = np.empty(count, np.int64), np.empty(count, np.int64), np.empty(count)
+    i = 0
+    for e in range(len(L_edge)):
+        if strong[e]:
+            s_row[i], s_col[i], s_L[i] = row[e], col[e], L_edge[e]
+            i += 1
+    return strong, s_row, s_col, s_L
+
+
+@njit
+def _children(mass, miss, rows, hit, pj, edge_of_pair, strong, p_hit, L_edge, p_new, w_new,
+              p_miss, miss_obj):
+    """The children's masses: the miss child of each component, w_k miss_k p_miss_i / miss_i
+    (the Poisson part's: w_k miss_k), then the hit child of each pair, l_kj p_hit_ij / L_ij
+    (Poisson: l_kj p_new_j / L_0j). p_hit is given on the `strong` edges, in order."""
+    n, P, A = len(mass), len(hit), len(miss_obj)
+    edge_factor = np.zeros(len(L_edge))
+    s = 0
+    for e in range(len(L_edge)):
+        if strong[e]:
+            edge_factor[e] = p_hit[s] / L_edge[e]
+            s += 1
+    out = np.empty(n + P)
+    for k in range(n):
+        factor = p_miss[rows[k]] / miss_obj[rows[k]] if rows[k] < A else 1.0
+        out[k] = mass[k] * miss[k] * factor
+    for p in range(P):
+        e = edge_of_pair[p]
+        out[n + p] = hit[p] * (edge_factor[e] if e >= 0 else p_new[pj[p]] / w_new[pj[p]])
+    return out
+
+
+@njit
+def _child_parents(keep, n, pk, pj, M, children):
+    """(kept children, their parent component, their detection (-1: miss), their mass) in
+    the order of the parents, a miss child before its hit children."""
+    K = len(keep)
+    parent, j, key = np.empty(K, np.int64), np.empty(K, np.int64), np.empty(K, np.int64)
+    for c in range(K):
+        if keep[c] < n:
+            parent[c], j[c] = keep[c], -1
+        else:
+            parent[c], j[c] = pk[keep[c] - n], pj[keep[c] - n]
+        key[c] = parent[c] * (M + 1) + j[c] + 1
+    order = np.argsort(key, kind="mergesort")
+    keep, parent, j = keep[order], parent[order], j[order]
+    return keep, parent, j, children[keep]
 
 
 @njit

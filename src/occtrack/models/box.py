@@ -42,9 +42,7 @@ def heights(means: np.ndarray) -> np.ndarray:
 
 def edges_from_ltwh(boxes: np.ndarray) -> np.ndarray:
     """(M, 4) left, top, width, height -> (M, 2, 2) edges."""
-    boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
-    low = boxes[:, :2]
-    return np.stack([low, low + boxes[:, 2:]], axis=-1)
+    return _edges_of_boxes(np.asarray(boxes, dtype=float).reshape(-1, 4))
 
 
 def ltwh_from_edges(edges: np.ndarray) -> np.ndarray:
@@ -80,14 +78,14 @@ class BoxMeasurement:
         return self.noise_std(means)[:, None, None, None] ** 2 * np.eye(2)
 
     def predicted_edges(self, means: np.ndarray) -> np.ndarray:
-        """Each component's noise-free box edges, (K, 2, 2)."""
-        return means @ self.H.T
+        """Each component's noise-free box edges, (K, 2, 2): H m (`_edges`)."""
+        return _edges(means)
 
     def observed(self, z: np.ndarray) -> np.ndarray:
         """Which edges of measurements z (M, 2, 2) were measured (not on the border)."""
-        low_ok = z[..., 0] > self.border_margin
-        high_ok = z[..., 1] < self.image_size - self.border_margin
-        return np.stack([low_ok, high_ok], axis=-1)
+        W, H = self.image_size
+        return _inside_margin(z, self.border_margin, W - self.border_margin,
+                              H - self.border_margin)
 
     def loglik(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                observed: np.ndarray) -> np.ndarray:
@@ -136,12 +134,11 @@ class BoxMeasurement:
         if observed.all():
             beyond = np.zeros((0, 2, 2))
         else:  # log P(edge beyond the border) of every component, as in `loglik`
-            sd = np.sqrt(np.stack([S[..., 0, 0], S[..., 1, 1]], axis=-1))  # (K, 2, 2)
-            border = np.stack([np.full(2, self.border_margin),
-                               self.image_size - self.border_margin], axis=-1)
+            W, H = self.image_size
             log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
-            beyond = log_ndtr(np.array([1.0, -1.0]) * (border - zhat) / sd) + log_peak[
-                :, None, None]
+            beyond = log_ndtr(_beyond_scores(zhat, S, self.border_margin,
+                                             W - self.border_margin, H - self.border_margin)
+                              ) + log_peak[:, None, None]
         return _loglik_pairs(zhat, S, z, observed, np.asarray(k, dtype=np.int64),
                              np.asarray(j, dtype=np.int64), beyond)
 
@@ -232,6 +229,55 @@ def _update_pairs(means, covs, z, observed, edge_noise, new_means, new_covs):
                              - w[a] * g1[b] + g0[a] * h0[b] + g1[a] * h1[b])
                     new_covs[i, axis, a, b] = value
                     new_covs[i, axis, b, a] = value
+
+
+@njit
+def _edges_of_boxes(boxes):
+    """(M, 4) left, top, width, height -> (M, 2, 2) edges [[left, right], [top, bottom]]."""
+    out = np.empty((len(boxes), 2, 2))
+    for j in range(len(boxes)):
+        for axis in range(2):
+            out[j, axis, 0] = boxes[j, axis]
+            out[j, axis, 1] = boxes[j, axis] + boxes[j, 2 + axis]
+    return out
+
+
+@njit
+def _inside_margin(z, margin, right, bottom):
+    """Which edges of z (M, 2, 2) lie inside the image by more than the margin: a low edge
+    above `margin`, a high one below `right` (x) or `bottom` (y)."""
+    out = np.empty(z.shape, dtype=np.bool_)
+    for j in range(len(z)):
+        out[j, 0, 0] = z[j, 0, 0] > margin
+        out[j, 1, 0] = z[j, 1, 0] > margin
+        out[j, 0, 1] = z[j, 0, 1] < right
+        out[j, 1, 1] = z[j, 1, 1] < bottom
+    return out
+
+
+@njit
+def _beyond_scores(zhat, S, margin, right, bottom):
+    """Standard scores (K, 2, 2) of the image border under each predicted edge: the edge
+    lies beyond the border with probability Phi(score): (margin - zhat) / sd for a low edge,
+    (zhat - right or bottom) / sd for a high one, sd the edge's standard deviation."""
+    out = np.empty(zhat.shape)
+    for k in range(len(zhat)):
+        for axis in range(2):
+            high = right if axis == 0 else bottom
+            out[k, axis, 0] = (margin - zhat[k, axis, 0]) / np.sqrt(S[k, axis, 0, 0])
+            out[k, axis, 1] = -(high - zhat[k, axis, 1]) / np.sqrt(S[k, axis, 1, 1])
+    return out
+
+
+@njit
+def _edges(means):
+    """H m per component and axis, H = [[1, 0, -1], [1, 0, 1]]: low edge c - s, high c + s."""
+    out = np.empty((len(means), 2, 2))
+    for k in range(len(means)):
+        for axis in range(2):
+            out[k, axis, 0] = means[k, axis, 0] - means[k, axis, 2]
+            out[k, axis, 1] = means[k, axis, 0] + means[k, axis, 2]
+    return out
 
 
 @njit

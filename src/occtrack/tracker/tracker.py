@@ -31,6 +31,7 @@ import numpy.typing as npt
 from occtrack.config import TrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.io.mot import MotTable
+from occtrack.jit import njit
 from occtrack.models.box import edges_from_ltwh, ltwh_from_states
 from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
@@ -258,25 +259,17 @@ class Tracker:
             self._report_id = np.append(self._report_id, np.zeros(grow, dtype=np.int64))
         r, means, centre_std = f.object_moments()
         took = f.slot_detection
-        height = np.maximum(2.0 * means[:, 1, 2], 1.0)
-        trusted = (took >= 0) | ((f.slot_coast <= c.report_coast_time + 1e-9)
-                                 & (centre_std.max(axis=1) < c.report_centre_std * height))
-        shown = np.flatnonzero(f.slot_used & (r > c.report_existence) & trusted)
-        fresh = shown[self._reported_serial[shown] != f.slot_serial[shown]]
-        # new ids in image order (centre x, then y), not in the order the detections came
-        fresh = fresh[np.lexsort((means[fresh, 1, 0], means[fresh, 0, 0]))]
-        self._report_id[fresh] = self._next_id + np.arange(len(fresh))
-        self._reported_serial[fresh] = f.slot_serial[fresh]
-        self._next_id += len(fresh)
+        shown, self._next_id = _reported(
+            r, means, centre_std, f.slot_used, took, f.slot_coast, f.slot_serial,
+            self._reported_serial, self._report_id, self._next_id, c.report_existence,
+            c.report_coast_time, c.report_centre_std)
         ids = self._report_id[shown]
-        order = np.argsort(ids)
-        shown = shown[order]
         boxes = ltwh_from_states(means[shown])
         index = took[shown]
         detected = index >= 0
         boxes[detected] = self._boxes[index[detected]]
         occluded = ~detected & (f.slot_hidden[shown] > OCCLUDED_ABOVE)
-        return Tracks(ids[order], boxes, r[shown], means[shown, :, 1].copy(), index,
+        return Tracks(ids, boxes, r[shown], means[shown, :, 1].copy(), index,
                       f.slot_class[shown].copy(), occluded)
 
     def run(self, detections: MotTable | Iterable[npt.ArrayLike], num_frames: int | None = None,
@@ -344,3 +337,43 @@ def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np
             raise ValueError(f"frame {index + 1}: detections must be (M, 4) or (M, 5), "
                              f"not {arr.shape}")
         yield arr[:, :4], (arr[:, 4] if arr.shape[1] == 5 else None)
+
+
+@njit
+def _reported(r, means, centre_std, used, took, coast, serial, reported_serial, report_id,
+              next_id, min_existence, coast_time, max_centre_std):
+    """`Tracker.tracks`' rule, slot by slot: (the slots reported now in id order, the next
+    free id). A slot reported for the first time since it got its serial (a new object in
+    it) gets the next ids, in image order (centre x, then y), written into `report_id` and
+    `reported_serial` in place."""
+    L = len(r)
+    shown = np.empty(L, np.int64)
+    n = 0
+    fresh = 0
+    for k in range(L):
+        if not used[k] or not r[k] > min_existence:
+            continue
+        if took[k] < 0:
+            height = max(2.0 * means[k, 1, 2], 1.0)
+            if not (coast[k] <= coast_time + 1e-9 and centre_std[k, 0] < max_centre_std * height
+                    and centre_std[k, 1] < max_centre_std * height):
+                continue
+        shown[n] = k
+        n += 1
+        if reported_serial[k] != serial[k]:
+            fresh += 1
+    shown = shown[:n]
+    if fresh:
+        new = np.empty(fresh, np.int64)
+        i = 0
+        for k in shown:
+            if reported_serial[k] != serial[k]:
+                new[i] = k
+                i += 1
+        by_y = np.argsort(means[new, 1, 0], kind="mergesort")
+        by_x = np.argsort(means[new[by_y], 0, 0], kind="mergesort")
+        new = new[by_y[by_x]]
+        for i in range(fresh):
+            report_id[new[i]] = next_id + i
+            reported_serial[new[i]] = serial[new[i]]
+    return shown[np.argsort(report_id[shown])], next_id + fresh
