@@ -370,18 +370,14 @@ class GaussianMixturePMB:
         if c.max_components_per_object:
             trim = self._trim_objects(new_mass, label[parent], j)
             keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
-        new_mean = mean[parent]
-        new_cov = cov[parent]
-        new_label = label[parent]
+        new_mean, new_cov, new_label, h, newborn = _inherit(mean, cov, label, parent, j)
         new_det, new_occ, new_coast = _child_features(
             parent, j, det, occ, self.occ[:n], established, v, q, miss, seen_hidden, coast,
             self.dt)
-        h = np.flatnonzero(j >= 0)
         if len(h):
             new_mean[h], new_cov[h] = self.measurement.update(
                 new_mean[h], new_cov[h], z[j[h]], observed[j[h]])
 
-        newborn = np.where((j >= 0) & (new_label < 0), j, -1)
         new_label = self._assign_labels(new_mass, new_label, newborn, M, classes)
         new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label = self._merge(
             new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label)
@@ -894,6 +890,30 @@ def _new_weights(z, score_term, seen_hidden, poisson_hit, rate, area, occludabil
         w_new[j] = (rate / (area * size) * score_term[j]
                     * (1.0 - occludability * seen_hidden[j]) + poisson_hit[j])
     return w_new
+
+
+@njit
+def _inherit(mean, cov, label, parent, j):
+    """Each child's copy of its parent's mean, covariance and label, the hit children (j >= 0)
+    and the detection each child of the Poisson part was born from (-1 for the others)."""
+    K = len(parent)
+    new_mean, new_cov = mean[parent], cov[parent]
+    new_label = np.empty(K, dtype=label.dtype)
+    newborn = np.full(K, -1, dtype=np.int64)
+    hits = 0
+    for c in range(K):
+        new_label[c] = label[parent[c]]
+        if j[c] >= 0:
+            hits += 1
+            if new_label[c] < 0:
+                newborn[c] = j[c]
+    h = np.empty(hits, dtype=np.int64)
+    hits = 0
+    for c in range(K):
+        if j[c] >= 0:
+            h[hits] = c
+            hits += 1
+    return new_mean, new_cov, new_label, h, newborn
 
 
 @njit

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from occtrack.jit import njit
 from occtrack.occlusion.base import OcclusionContext, OcclusionTerms
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 
@@ -33,22 +34,35 @@ class ObjectWiseExpectedValue:
         if k == 0 or len(occluders) == 0:
             return OcclusionTerms(np.ones(k), np.zeros(k))
         boxes = ctx.measurement_model.predicted_edges(ctx.means)
-        mean_boxes = _mean_boxes(boxes, ctx.weights, ctx.owner, len(r))[occluders]
-        position = np.full(len(r) + 1, -1)  # an object's place among the occluders
-        position[occluders] = np.arange(len(occluders))
-        own = position[ctx.owner]  # (the Poisson part, owner -1, reads the last: -1)
+        mean_boxes, own = _occluder_boxes(boxes, np.asarray(ctx.weights, dtype=float),
+                                          np.asarray(ctx.owner, dtype=np.int64), occluders)
         visible = self.geometry.visible(boxes, mean_boxes, weights=r[occluders], skip=own,
                                         sparse=ctx.gating)
         return OcclusionTerms(visible, np.zeros(k))
 
 
-def _mean_boxes(boxes: np.ndarray, weights: np.ndarray, owner: np.ndarray,
-                n_objects: int) -> np.ndarray:
-    """Each object's mean box: the weight-averaged edges of its components, (n, 2, 2)."""
-    mine = owner >= 0
-    flat = boxes[mine].reshape(-1, 4)
-    w = weights[mine]
-    total = np.bincount(owner[mine], weights=w, minlength=n_objects)
-    sums = np.stack([np.bincount(owner[mine], weights=w * flat[:, c], minlength=n_objects)
-                     for c in range(4)], axis=1)
-    return (sums / np.maximum(total, 1e-300)[:, None]).reshape(n_objects, 2, 2)
+@njit
+def _occluder_boxes(boxes, weights, owner, occluders):
+    """The occluders' mean boxes, (n, 2, 2): each the weight-averaged edges of its object's
+    components; and each component's place among the occluders (-1: its object is none, or
+    it is the Poisson part's), the one occluder it never counts."""
+    position = np.full(owner.max() + 1 if len(owner) else 0, -1)
+    for i in range(len(occluders)):
+        if occluders[i] < len(position):
+            position[occluders[i]] = i
+    total = np.zeros(len(occluders))
+    sums = np.zeros((len(occluders), 2, 2))
+    own = np.full(len(owner), -1)
+    for k in range(len(owner)):
+        if owner[k] >= 0 and position[owner[k]] >= 0:
+            i = position[owner[k]]
+            own[k] = i
+            total[i] += weights[k]
+            for axis in range(2):
+                for e in range(2):
+                    sums[i, axis, e] += weights[k] * boxes[k, axis, e]
+    for i in range(len(occluders)):
+        for axis in range(2):
+            for e in range(2):
+                sums[i, axis, e] /= max(total[i], 1e-300)
+    return sums, own
