@@ -32,7 +32,7 @@ from occtrack.config import TrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.io.mot import MotTable
 from occtrack.jit import njit
-from occtrack.models.box import edges_from_ltwh, ltwh_from_states
+from occtrack.models.box import edges_from_ltwh
 from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.occlusion.boxes import box_occlusion
@@ -263,14 +263,8 @@ class Tracker:
             r, means, centre_std, f.slot_used, took, f.slot_coast, f.slot_serial,
             self._reported_serial, self._report_id, self._next_id, c.report_existence,
             c.report_coast_time, c.report_centre_std)
-        ids = self._report_id[shown]
-        boxes = ltwh_from_states(means[shown])
-        index = took[shown]
-        detected = index >= 0
-        boxes[detected] = self._boxes[index[detected]]
-        occluded = ~detected & (f.slot_hidden[shown] > OCCLUDED_ABOVE)
-        return Tracks(ids, boxes, r[shown], means[shown, :, 1].copy(), index,
-                      f.slot_class[shown].copy(), occluded)
+        return Tracks(self._report_id[shown], *_report_rows(
+            shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE))
 
     def run(self, detections: MotTable | Iterable[npt.ArrayLike], num_frames: int | None = None,
             quiet: bool = True, desc: str = "tracking") -> TrackResult:
@@ -337,6 +331,29 @@ def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np
             raise ValueError(f"frame {index + 1}: detections must be (M, 4) or (M, 5), "
                              f"not {arr.shape}")
         yield arr[:, :4], (arr[:, 4] if arr.shape[1] == 5 else None)
+
+
+@njit
+def _report_rows(shown, r, means, took, detections, hidden, classes, occluded_above):
+    """The `Tracks` fields after the ids, for the slots `shown`: boxes (the detection's
+    when one was taken, else the state's), existence, velocities, detection index, class and
+    whether occlusion (probability above `occluded_above`) explains a miss."""
+    K = len(shown)
+    boxes, velocities = np.empty((K, 4)), np.empty((K, 2))
+    existence, index = np.empty(K), np.empty(K, dtype=np.int64)
+    cls, occluded = np.empty(K, dtype=classes.dtype), np.zeros(K, dtype=np.bool_)
+    for a in range(K):
+        k = shown[a]
+        existence[a], index[a], cls[a] = r[k], took[k], classes[k]
+        for axis in range(2):
+            velocities[a, axis] = means[k, axis, 1]
+            boxes[a, axis] = means[k, axis, 0] - means[k, axis, 2]
+            boxes[a, 2 + axis] = 2.0 * means[k, axis, 2]
+        if took[k] >= 0:
+            boxes[a] = detections[took[k]]
+        else:
+            occluded[a] = hidden[k] > occluded_above
+    return boxes, existence, velocities, index, cls, occluded
 
 
 @njit
