@@ -270,20 +270,21 @@ class GaussianMixturePMB:
                           self.config.exit_survival)
 
     def _size_prior(self) -> tuple[np.ndarray, np.ndarray]:
+        """Half-size (mean, std) of a newborn, px: the configured values, else those of the
+        detections seen so far, else (30, 90) and a third of it."""
         c = self.config
         count, total, squares = self._size_stats
+        learnt = count[0] >= 2
+        if learnt:
+            learnt_mean, learnt_std = _learnt_sizes(count, total, squares)
         if c.birth_half_size is not None:
             mean = np.asarray(c.birth_half_size, dtype=float)
-        elif count[0] >= 2:
-            mean = total / count
         else:
-            mean = np.array([30.0, 90.0])
+            mean = learnt_mean if learnt else np.array([30.0, 90.0])
         if c.birth_half_size_std is not None:
             std = np.asarray(c.birth_half_size_std, dtype=float)
-        elif count[0] >= 2:
-            std = np.sqrt(np.maximum(squares / count - (total / count) ** 2, 1.0))
         else:
-            std = mean / 3.0
+            std = learnt_std if learnt else mean / 3.0
         return mean, np.maximum(std, 1.0)
 
     def _learn_sizes(self, z: np.ndarray, observed: np.ndarray) -> None:
@@ -295,16 +296,10 @@ class GaussianMixturePMB:
         size_mean, size_std = self._size_prior()
         mass, means, covs = self.births.components(c.edge_birth_rate * self.dt, spread,
                                                    size_mean, size_std, 2.0 * size_mean[1])
-        keep = mass > 0
-        b = int(keep.sum())
-        self._reserve(self.n + b)
-        s = slice(self.n, self.n + b)
-        self.mass[s], self.mean[s], self.cov[s] = mass[keep], means[keep], covs[keep]
-        self.det[s] = c.birth_detectability
-        self.occ[s] = c.birth_occludability
-        self.label[s] = -1
-        self.coast[s] = 0.0
-        self.n += b
+        self._reserve(self.n + len(mass))
+        self.n = _append_births(self.n, mass, means, covs, c.birth_detectability,
+                                c.birth_occludability, self.mass, self.mean, self.cov, self.det,
+                                self.occ, self.label, self.coast)
 
     # -- update ---------------------------------------------------------------------------
 
@@ -327,7 +322,7 @@ class GaussianMixturePMB:
         terms = self.occlusion.terms(ctx)
         v, q, pd, miss = _miss_terms(det, occ, terms.visible, terms.hidden)
 
-        seen_hidden = np.zeros(M) if terms.seen_hidden is None else np.clip(
+        seen_hidden = np.zeros(M) if terms.seen_hidden is None else _clipped(
             terms.seen_hidden, 0.0, 1.0)
         # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
         # sorted by label, so each object's sums are sums over one contiguous run
@@ -348,7 +343,7 @@ class GaussianMixturePMB:
         miss_obj = _object_misses(rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden)
         W, H = self.image_size
         # (numpy's power, not libm's: they differ in the last bit)
-        score_term = np.clip(scores, c.score_floor, 1.0) ** (-c.clutter_score_power)
+        score_term = _clipped(scores, c.score_floor, 1.0) ** (-c.clutter_score_power)
         w_new = _new_weights(z, score_term, seen_hidden, poisson_hit, c.clutter_rate, W * H,
                              c.occludability)
 
@@ -392,7 +387,7 @@ class GaussianMixturePMB:
         self._reserve(k)
         self.n = k
         self.mass[:k], self.mean[:k], self.cov[:k] = new_mass, new_mean, new_cov
-        self.det[:k], self.occ[:k] = np.clip(new_det, 0, 1), np.clip(new_occ, 0, 1)
+        self.det[:k], self.occ[:k] = _clipped(new_det, 0.0, 1.0), _clipped(new_occ, 0.0, 1.0)
         self.coast[:k], self.label[:k] = new_coast, new_label
         self._cap_existence()
 
@@ -914,6 +909,35 @@ def _inherit(mean, cov, label, parent, j):
             h[hits] = c
             hits += 1
     return new_mean, new_cov, new_label, h, newborn
+
+
+@njit
+def _clipped(x, low, high):
+    """np.clip(x, low, high) as a new array (numpy's clip costs more than the loop here)."""
+    out = np.empty_like(x)
+    for i in range(len(x)):
+        out[i] = min(max(x[i], low), high)
+    return out
+
+
+@njit
+def _learnt_sizes(count, total, squares):
+    """Mean half-size of the detections counted and its standard deviation (at least 1 px)."""
+    mean = total / count
+    return mean, np.sqrt(np.maximum(squares / count - mean ** 2, 1.0))
+
+
+@njit
+def _append_births(n, mass, means, covs, det, occ, pool_mass, pool_mean, pool_cov, pool_det,
+                   pool_occ, pool_label, pool_coast):
+    """Append the birth components of positive mass to the pool after its first n (the
+    Poisson part: label -1, never missed, d and o the births'); returns the new n."""
+    for b in range(len(mass)):
+        if mass[b] > 0:
+            pool_mass[n], pool_mean[n], pool_cov[n] = mass[b], means[b], covs[b]
+            pool_det[n], pool_occ[n], pool_label[n], pool_coast[n] = det, occ, -1, 0.0
+            n += 1
+    return n
 
 
 @njit

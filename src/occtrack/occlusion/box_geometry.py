@@ -27,6 +27,9 @@ import numpy as np
 from occtrack.jit import njit
 from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
 
+NO_WEIGHTS = np.zeros(0)
+NO_SKIP = np.zeros(0, dtype=np.int64)
+
 
 @dataclass(frozen=True)
 class BoxOcclusionGeometry:
@@ -52,8 +55,9 @@ class BoxOcclusionGeometry:
         hides it, occluder n counting with weight w_n (1 when None) and never the occluder
         skip[k] (-1: none). `sparse` False computes the full table."""
         K, N = len(hidden), len(occluders)
-        w = np.ones(N) if weights is None else np.asarray(weights, dtype=float)
-        never = np.full(K, -1, dtype=np.int64) if skip is None else np.asarray(skip, np.int64)
+        # (empty weights: all 1; empty skip: none)
+        w = NO_WEIGHTS if weights is None else np.asarray(weights, dtype=float)
+        never = NO_SKIP if skip is None else np.asarray(skip, np.int64)
         hidden = np.asarray(hidden, dtype=float)
         occluders = np.asarray(occluders, dtype=float)
         if not sparse or K * N <= DENSE_PAIRS:
@@ -92,9 +96,9 @@ def _visible_dense(hidden, occluders, weights, skip, gain, ramp_zero, ramp_one):
     out = np.ones(len(hidden))
     for k in range(len(hidden)):
         for n in range(len(occluders)):
-            if n != skip[k]:
-                out[k] *= 1.0 - weights[n] * _hides(hidden[k], occluders[n], gain, ramp_zero,
-                                                    ramp_one)
+            if len(skip) == 0 or n != skip[k]:
+                p = _hides(hidden[k], occluders[n], gain, ramp_zero, ramp_one)
+                out[k] *= 1.0 - (weights[n] * p if len(weights) else p)
     return out
 
 
@@ -104,8 +108,10 @@ def _visible_pairs(hidden, occluders, k, n, weights, skip, gain, ramp_zero, ramp
     as logarithms."""
     log_visible = np.zeros(len(hidden))
     for e in range(len(k)):
-        if n[e] != skip[k[e]]:
-            p = weights[n[e]] * _hides(hidden[k[e]], occluders[n[e]], gain, ramp_zero, ramp_one)
+        if len(skip) == 0 or n[e] != skip[k[e]]:
+            p = _hides(hidden[k[e]], occluders[n[e]], gain, ramp_zero, ramp_one)
+            if len(weights):
+                p *= weights[n[e]]
             log_visible[k[e]] += math.log1p(-min(p, 1.0)) if p < 1.0 else -math.inf
     return np.exp(log_visible)
 
