@@ -111,11 +111,11 @@ class GaussianMixturePMB:
         c = config
         self.config = c
         self.occlusion = occlusion
-        self._dt_models: dict[float, tuple] = {}
-        self._use_dt(c.dt)
         self.measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
+        self._dt_models: dict[float, tuple] = {}
+        self._use_dt(c.dt)
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
         self.image_size = np.asarray(c.image_size, dtype=float)
         cap = c.capacity or INITIAL_POOL
@@ -242,10 +242,11 @@ class GaussianMixturePMB:
                                        c.velocity_time),
                       ConstantVelocity(dt, c.position_noise, c.velocity_noise, c.size_noise,
                                        c.coast_velocity_time),
-                      float(np.exp(-c.death_rate * dt)))
+                      float(np.exp(-c.death_rate * dt)),
+                      (self.detectability.memory(dt), self.occludability.memory(dt)))
             self._dt_models[dt] = models
         self.dt = dt
-        self.motion, self.coast_motion, self.survival_inside = models
+        self.motion, self.coast_motion, self.survival_inside, self._memories = models
 
     # -- prediction -----------------------------------------------------------------------
 
@@ -260,14 +261,12 @@ class GaussianMixturePMB:
         n = self.n
         if n == 0:
             return
-        _predict_in_place(self.mean[:n], self.cov[:n], self.coast[:n] > 0.5 * self.dt,
-                          self.motion.F, self.motion.Q, self.coast_motion.F,
-                          self.coast_motion.Q)
-        for values, feature in ((self.det[:n], self.detectability),
-                                (self.occ[:n], self.occludability)):
-            _relax_in_place(values, feature.stationary, feature.memory(self.dt))
-        _survive_in_place(self.mass[:n], self.mean[:n], self.image_size, self.survival_inside,
-                          self.config.exit_survival)
+        _predict_pool(self.mass[:n], self.mean[:n], self.cov[:n], self.det[:n], self.occ[:n],
+                      self.coast[:n], 0.5 * self.dt, self.motion.F, self.motion.Q,
+                      self.coast_motion.F, self.coast_motion.Q,
+                      self.detectability.stationary, self._memories[0],
+                      self.occludability.stationary, self._memories[1], self.image_size,
+                      self.survival_inside, self.config.exit_survival)
 
     def _size_prior(self) -> tuple[np.ndarray, np.ndarray]:
         """Half-size (mean, std) of a newborn, px: the configured values, else those of the
@@ -1085,6 +1084,18 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, ma
             out_edge[i] = edge_of_cand[cand_of_pair[e]] if rows[pk[e]] < A else -1
             i += 1
     return out_k, out_j, out_hit, out_edge, poisson_hit, e_row, e_col, L_edge
+
+
+@njit
+def _predict_pool(mass, mean, cov, det, occ, coast, coasting_after, F, Q, F_coast, Q_coast,
+                  det_stationary, det_memory, occ_stationary, occ_memory, image_size,
+                  survival_inside, exit_survival):
+    """The prediction of every component, in place: motion (the coasting model for one
+    unseen longer than `coasting_after` s), the Markov features d and o, survival."""
+    _predict_in_place(mean, cov, coast > coasting_after, F, Q, F_coast, Q_coast)
+    _relax_in_place(det, det_stationary, det_memory)
+    _relax_in_place(occ, occ_stationary, occ_memory)
+    _survive_in_place(mass, mean, image_size, survival_inside, exit_survival)
 
 
 @njit
