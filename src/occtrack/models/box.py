@@ -133,12 +133,15 @@ class BoxMeasurement:
         the numbers `loglik` gives for those pairs."""
         if observed.all():
             beyond = np.zeros((0, 2, 2))
-        else:  # log P(edge beyond the border) of every component, as in `loglik`
+        else:  # log P(edge beyond the border) of every component, as in `loglik`, on the
+            # edges (axis, low or high) that some detection has on the border only
             W, H = self.image_size
             log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
-            beyond = log_ndtr(_beyond_scores(zhat, S, self.border_margin,
-                                             W - self.border_margin, H - self.border_margin)
-                              ) + log_peak[:, None, None]
+            scores = _beyond_scores(zhat, S, self.border_margin, W - self.border_margin,
+                                    H - self.border_margin)
+            censored = ~observed.all(axis=0)
+            beyond = np.zeros(zhat.shape)
+            beyond[:, censored] = log_ndtr(scores[:, censored]) + log_peak[:, None]
         return _loglik_pairs(zhat, S, z, observed, np.asarray(k, dtype=np.int64),
                              np.asarray(j, dtype=np.int64), beyond)
 
