@@ -526,15 +526,15 @@ class GaussianMixturePMB:
             return mass, mean, cov, det, occ, coast, label
         c = self.config
         cell = np.array([c.merge_position, c.merge_velocity, c.merge_position] * 2)
-        key = _cell_keys(mean, label, cell)
         # one integer per cell (mixed radix, label first) when it fits: one sort instead of
         # lexsort's eight, the same order
-        fits, order, start = _packed_order(key)
-        if not fits:
-            order = np.lexsort(key.T[::-1])
-            key = key[order]
-            start = np.ones(len(order), dtype=bool)
-            start[1:] = (key[1:] != key[:-1]).any(axis=1)
+        fits, key, pooled = _merge_packed(mean, label, cell, mass, cov, det, occ, coast)
+        if fits:
+            return pooled
+        order = np.lexsort(key.T[::-1])
+        key = key[order]
+        start = np.ones(len(order), dtype=bool)
+        start[1:] = (key[1:] != key[:-1]).any(axis=1)
         if start.all():
             return mass, mean, cov, det, occ, coast, label
         return _pool_cells(order, start, mass, mean, cov, det, occ, coast, label)
@@ -720,6 +720,21 @@ def _cap_in_place(mass, label, L):
         i = label[k]
         if i >= 0 and r[i] > 1.0:
             mass[k] *= 1.0 / max(r[i], 1e-300)
+
+
+@njit
+def _merge_packed(mean, label, cell, mass, cov, det, occ, coast):
+    """(fits, cell keys, the pool merged): `_cell_keys`, then `_packed_order` and
+    `_pool_cells` when the packed keys fit (else the pool comes back as given, for the
+    lexsort path), and the pool as given when no two components share a cell."""
+    key = _cell_keys(mean, label, cell)
+    fits, order, start = _packed_order(key)
+    if fits:
+        for i in range(len(start)):
+            if not start[i]:
+                return True, key, _pool_cells(order, start, mass, mean, cov, det, occ, coast,
+                                              label)
+    return fits, key, (mass, mean, cov, det, occ, coast, label)
 
 
 @njit
