@@ -102,6 +102,7 @@ LOG_FLOOR = -300.0
 EDGE_FLOOR = 1e-9  # gating: association edges that cannot reach this p_hit are left out
 INITIAL_POOL = 256  # components, when the pool grows with the scene
 INITIAL_SLOTS = 32  # label slots, likewise
+NO_CLASSES = np.zeros(0, dtype=np.int64)  # (the kernels' "one class")
 
 
 class GaussianMixturePMB:
@@ -309,12 +310,12 @@ class GaussianMixturePMB:
         n, M = self.n, len(z)
         mass, mean, cov = self.mass[:n], self.mean[:n], self.cov[:n]
         det, label, coast = self.det[:n], self.label[:n], self.coast[:n]
-        L = len(self.slot_used)
         # occlusion explains the misses of confirmed objects only: a newborn's broad density
         # overlaps the detections around it, and a miss it could blame on them would keep a
         # false track alive; the others are treated as not occludable (o = 0)
         established, occ, o_seen, r_slot, within = _occludable(
-            label, mass, self.occ[:n], self.confirmed(), L, c.occludability)
+            label, mass, self.occ[:n], self.slot_used, self.slot_hits, c.confirm_hits,
+            c.occludability)
         ctx = OcclusionContext(means=mean, covs=cov, weights=within, owner=label,
                                existence=r_slot, measurements=z,
                                measurement_model=self.measurement)
@@ -337,20 +338,18 @@ class GaussianMixturePMB:
         pk, pj, hit, edge_of_pair, poisson_hit, e_row, e_col, L_edge = _hit_edges(
             pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass, det, o_seen,
             v, seen_hidden, pd, bool(seen_hidden.any()), label, self.slot_class,
-            np.zeros(0, dtype=np.int64) if classes is None else classes)
+            NO_CLASSES if classes is None else classes)
 
-        miss_obj = _object_misses(rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden)
         W, H = self.image_size
         # (numpy's power, not libm's: they differ in the last bit)
         score_term = _clipped(scores, c.score_floor, 1.0) ** (-c.clutter_score_power)
-        w_new = _new_weights(z, score_term, seen_hidden, poisson_hit, c.clutter_rate, W * H,
-                             c.occludability)
-
         # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
         # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
         # such edges out (gating) splits a crowd's graph into the clusters that really compete
-        strong, s_row, s_col, s_L = _strong_edges(e_row, e_col, L_edge, miss_obj, w_new,
-                                                  EDGE_FLOOR if c.gating else 0.0)
+        miss_obj, w_new, strong, s_row, s_col, s_L = _association_weights(
+            rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden, z, score_term,
+            seen_hidden, poisson_hit, c.clutter_rate, W * H, c.occludability, e_row, e_col,
+            L_edge, EDGE_FLOOR if c.gating else 0.0)
         marg = lbp_sparse(s_row, s_col, s_L, miss_obj, w_new, tol=c.lbp_tolerance,
                           max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
@@ -511,8 +510,7 @@ class GaussianMixturePMB:
             label = _open_slots(label, newborn, new[keep_new], M, self._next_serial,
                                 self.slot_used, self.slot_serial, self.slot_age,
                                 self.slot_hits, self.slot_coast, self.slot_detection,
-                                self.slot_class, np.zeros(0, dtype=np.int64)
-                                if classes is None else classes)
+                                self.slot_class, NO_CLASSES if classes is None else classes)
             self._next_serial += len(keep_new)
         return label
 
@@ -614,13 +612,14 @@ def _open_slots(label, newborn, meas, M, serial0, used, serial, age, hits, coast
 
 
 @njit
-def _occludable(label, mass, occ_all, confirmed, L, stationary):
+def _occludable(label, mass, occ_all, used, hits, confirm_hits, stationary):
     """(established, o, o_seen, r per slot, w_k / r of its object) of each component:
-    occlusion is for the components of confirmed objects (o = 0 for the others; o_seen, the
+    occlusion is for the components of confirmed objects (`GaussianMixturePMB.confirmed`: used
+    slots with `confirm_hits` hits; o = 0 for the others; o_seen, the
     o that weighs a detection's source, is the `stationary` occludability for them); the
     Poisson part's components keep w_k."""
     n = len(label)
-    r = np.zeros(L)
+    r = np.zeros(len(used))
     for k in range(n):
         if label[k] >= 0:
             r[label[k]] += mass[k]
@@ -629,8 +628,8 @@ def _occludable(label, mass, occ_all, confirmed, L, stationary):
     for k in range(n):
         i = label[k]
         if i >= 0:
-            established[k] = confirmed[i]
-            if confirmed[i]:
+            established[k] = used[i] and hits[i] >= confirm_hits
+            if established[k]:
                 occ[k] = occ_all[k]
                 o_seen[k] = occ_all[k]
             within[k] = mass[k] / max(r[i], 1e-300)
@@ -868,6 +867,18 @@ def _object_rows(label, used):
     for k in range(len(label)):
         rows[k] = row_of_slot[label[k]] if label[k] >= 0 else A
     return slots, rows
+
+
+@njit
+def _association_weights(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden, z,
+                         score_term, seen_hidden, poisson_hit, rate, area, occludability,
+                         e_row, e_col, L_edge, floor):
+    """`_object_misses`, `_new_weights` and `_strong_edges` in one call: (miss_i, L_0j, and
+    the strong edges: mask, rows, columns, L_ij)."""
+    miss_obj = _object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden)
+    w_new = _new_weights(z, score_term, seen_hidden, poisson_hit, rate, area, occludability)
+    strong, s_row, s_col, s_L = _strong_edges(e_row, e_col, L_edge, miss_obj, w_new, floor)
+    return miss_obj, w_new, strong, s_row, s_col, s_L
 
 
 @njit
