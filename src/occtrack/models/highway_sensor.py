@@ -20,9 +20,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
-from occtrack.occlusion.extents import union
+from occtrack.jit import njit
 
 
 @dataclass(frozen=True)
@@ -102,15 +101,15 @@ class MeasurementModel:
     def occluded_parts(self, scan: Scan) -> list[tuple[np.ndarray, np.ndarray]]:
         """For each lane, the hidden parts (sorted disjoint intervals, metres in that lane)
         made by the measured shapes of the nearer lanes."""
-        parts = []
-        starts, ends = np.empty(0), np.empty(0)
-        lo, hi = scan.extent
-        for k, d in enumerate(self.distances):
-            parts.append((starts * d, ends * d))
-            sel = scan.lane == k
-            starts, ends = union(np.concatenate((starts, lo[sel] / d)),
-                                 np.concatenate((ends, hi[sel] / d)))
-        return parts
+        lo, hi, start = self._parts(scan)
+        return [(lo[start[k]:start[k + 1]], hi[start[k]:start[k + 1]])
+                for k in range(self.n_lanes)]
+
+    def _parts(self, scan: Scan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`occluded_parts` concatenated: lane k's are lo/hi[start[k]:start[k + 1]]."""
+        ext_lo, ext_hi = scan.extent
+        return _occluded_parts(scan.lane, np.ascontiguousarray(ext_lo),
+                               np.ascontiguousarray(ext_hi), self.distances)
 
     def hidden_probability(self, lane: np.ndarray, left: np.ndarray, right: np.ndarray,
                            scan: Scan, parts=None) -> np.ndarray:
@@ -119,13 +118,11 @@ class MeasurementModel:
         are visited (a binary search, then a walk back), so the cost is in the particles near
         them. `parts`: `occluded_parts(scan)`, if already at hand."""
         if parts is None:
-            parts = self.occluded_parts(scan)
-        count = np.array([len(lo) for lo, _ in parts], np.int64)
-        if count.sum() == 0 or len(lane) == 0:
-            return np.zeros(len(lane))
-        start = np.concatenate(([0], np.cumsum(count)))
-        lo = np.concatenate([p[0] for p in parts])
-        hi = np.concatenate([p[1] for p in parts])
+            lo, hi, start = self._parts(scan)
+        else:
+            start = np.concatenate(([0], np.cumsum([len(p[0]) for p in parts]))).astype(np.int64)
+            lo = np.concatenate([np.asarray(p[0], float) for p in parts])
+            hi = np.concatenate([np.asarray(p[1], float) for p in parts])
         return _hidden_probability(np.asarray(lane, np.int64), np.asarray(left, float),
                                    np.asarray(right, float), lo, hi, start, self.sigma,
                                    self.tail * self.sigma)
@@ -175,12 +172,12 @@ _SQRT_HALF = 0.7071067811865476
 _INV_SQRT_2PI = 0.3989422804014327
 
 
-@njit(cache=True, inline="always")
+@njit
 def _ndtr(x):
     return 0.5 * math.erfc(-x * _SQRT_HALF)
 
 
-@njit(cache=True, inline="always")
+@njit
 def _end_term(e, z_lo, z_hi, hidden, inv_sigma, tail):
     """f(e): N(z; e, sigma^2) for a seen end, P(e + noise in [z_lo, z_hi]) for a hidden one;
     0 beyond `tail` standard deviations."""
@@ -195,7 +192,7 @@ def _end_term(e, z_lo, z_hi, hidden, inv_sigma, tail):
     return math.exp(-0.5 * lo * lo) * _INV_SQRT_2PI * inv_sigma
 
 
-@njit(cache=True, inline="always")
+@njit
 def _both_orders(lo, hi, zl0, zl1, lh, zr0, zr1, rh, inv, tail):
     """p(z | ends lo, hi) summed over the two orders of the two ends; the second factor of a
     product is skipped where the first is 0 (most particles are far from most measurements)."""
@@ -209,7 +206,7 @@ def _both_orders(lo, hi, zl0, zl1, lh, zr0, zr1, rh, inv, tail):
     return total
 
 
-@njit(cache=True)
+@njit
 def _likelihood(left, right, z_left, z_right, left_hidden, right_hidden, sigma, tail):
     """`_both_orders` of every (particle row, particle)."""
     rows, n = left.shape
@@ -224,7 +221,7 @@ def _likelihood(left, right, z_left, z_right, left_hidden, right_hidden, sigma, 
     return out
 
 
-@njit(cache=True)
+@njit
 def _hit_weights(particles, weights, row, first, count, width, z_left, z_right, left_hidden,
                  right_hidden, sigma, tail):
     out = np.zeros((len(row), width))
@@ -241,7 +238,53 @@ def _hit_weights(particles, weights, row, first, count, width, z_left, z_right, 
     return out
 
 
-@njit(cache=True)
+@njit
+def _occluded_parts(scan_lane, ext_lo, ext_hi, distances):
+    """Lane k's hidden parts: the union of the angles [lo, hi] / d covered by the shapes of
+    lanes 0 .. k-1 (touching intervals merged), scaled back by d_k, concatenated over the lanes
+    (lo/hi[start[k]:start[k + 1]]). One sort of all shapes by angle, then one merging walk per
+    lane over the shapes of its nearer lanes."""
+    lanes = len(distances)
+    m = len(scan_lane)
+    a_lo = np.empty(m)
+    a_hi = np.empty(m)
+    for j in range(m):
+        d = distances[scan_lane[j]]
+        a_lo[j] = ext_lo[j] / d
+        a_hi[j] = ext_hi[j] / d
+    order = np.argsort(a_lo, kind="mergesort")
+    lo = np.empty(max(lanes * m, 1))
+    hi = np.empty(max(lanes * m, 1))
+    start = np.zeros(lanes + 1, np.int64)
+    c = 0
+    for k in range(lanes):
+        start[k] = c
+        d = distances[k]
+        have = False
+        run_lo = run_hi = 0.0
+        for t in range(m):
+            j = order[t]
+            if scan_lane[j] >= k:
+                continue
+            if have and a_lo[j] <= run_hi:
+                run_hi = max(run_hi, a_hi[j])
+                continue
+            if have:
+                lo[c] = run_lo * d
+                hi[c] = run_hi * d
+                c += 1
+            have = True
+            run_lo = a_lo[j]
+            run_hi = a_hi[j]
+        if have:
+            lo[c] = run_lo * d
+            hi[c] = run_hi * d
+            c += 1
+    start[lanes] = c
+    return lo[:c], hi[:c], start
+
+
+@njit
 def _hidden_probability(lane, left, right, lo, hi, start, sigma, reach):
     """Parts of lane k are lo/hi[start[k]:start[k + 1]], sorted and disjoint (a few)."""
     q = np.zeros(len(lane))
