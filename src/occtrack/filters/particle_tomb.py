@@ -281,14 +281,18 @@ def _advance(x, w, direction, half, survival):
     rows, n = w.shape
     alive = np.zeros(rows)
     for i in range(rows):
+        total = 0.0
+        forward = direction[i] > 0
         for k in range(n):
-            x[i, k, 0] += x[i, k, 2]
-            rear = x[i, k, 0] if direction[i] > 0 else -(x[i, k, 0] + x[i, k, 1])
+            left = x[i, k, 0] + x[i, k, 2]
+            x[i, k, 0] = left
+            rear = left if forward else -(left + x[i, k, 1])
             if rear >= half:
                 w[i, k] = 0.0
             else:
                 w[i, k] *= survival
-                alive[i] += w[i, k]
+                total += w[i, k]
+        alive[i] = total
     return alive
 
 
@@ -315,7 +319,10 @@ def _predict(x, w, r, track_direction, ux, uw, nu, sobol, shift, direction, half
         d = direction[lane]
         for k in range(nu, per_lane):
             for e in range(3):
-                u[e] = (sobol[k - nu, e] + shift[lane, e]) % 1.0
+                # (a + b) mod 1 for a, b in [0, 1): the subtraction is exact, as fmod is
+                u[e] = sobol[k - nu, e] + shift[lane, e]
+                if u[e] >= 1.0:
+                    u[e] -= 1.0
             speed = min_speed + (max_speed - min_speed) * u[0]
             length = min_length + (max_length - min_length) * u[1]
             front = -half + speed * u[2]
@@ -323,11 +330,38 @@ def _predict(x, w, r, track_direction, ux, uw, nu, sobol, shift, direction, half
             ux[lane, k, 1] = length
             ux[lane, k, 2] = d * speed
             uw[lane, k] = birth_weight
-        order = np.argsort(ux[lane, :, 0], kind="mergesort")
+        order = _sort_order(ux[lane, :, 0], nu)
         xs = ux[lane][order]
         ws = uw[lane][order]
         ux[lane] = xs
         uw[lane] = ws
+
+
+@njit
+def _sort_order(key, nu):
+    """The order that sorts `key`, whose first `nu` entries were sorted one step ago (each
+    has moved a little since): insertion sort of those, a sort of the rest, then a merge."""
+    n = len(key)
+    head = np.arange(nu)
+    for a in range(1, nu):
+        i = head[a]
+        v = key[i]
+        b = a - 1
+        while b >= 0 and key[head[b]] > v:
+            head[b + 1] = head[b]
+            b -= 1
+        head[b + 1] = i
+    tail = nu + np.argsort(key[nu:])
+    order = np.empty(n, np.int64)
+    a = b = 0
+    for c in range(n):
+        if b >= n - nu or (a < nu and key[head[a]] <= key[tail[b]]):
+            order[c] = head[a]
+            a += 1
+        else:
+            order[c] = tail[b]
+            b += 1
+    return order
 
 
 @njit
@@ -408,6 +442,10 @@ def _associate(x, w, r, lane, ux, uw, visible, hidden, pd, z_lane, z_left, z_rig
             p = f0 + k
             wv = uw[lj, p] * visible[base + lj * per_lane + p]
             lo = ux[lj, p, 0]
+            if (k > 0 and lo == ux[lj, p - 1, 0] and ux[lj, p, 1] == ux[lj, p - 1, 1]
+                    and wv == uw[lj, p - 1] * visible[base + lj * per_lane + p - 1]):
+                hit_u[j, k] = hit_u[j, k - 1]  # a copy (resampling), beside its original
+                continue
             hit_u[j, k] = wv * _both_orders(lo, lo + ux[lj, p, 1], zl0, zl1, lh, zr0, zr1, rh,
                                             inv, tail)
         e[j] = pd * _row_sum(hit_u[j])

@@ -174,6 +174,13 @@ _INV_SQRT_2PI = 0.3989422804014327
 
 @njit
 def _ndtr(x):
+    """Phi(x). Beyond 9 (below -39) erfc rounds Phi to exactly 1 (0) in double precision, so
+    those are returned without calling it: the same numbers, for less work where a hidden
+    part is wide against sigma."""
+    if x > 9.0:
+        return 1.0
+    if x < -39.0:
+        return 0.0
     return 0.5 * math.erfc(-x * _SQRT_HALF)
 
 
@@ -286,13 +293,18 @@ def _occluded_parts(scan_lane, ext_lo, ext_hi, distances):
 
 @njit
 def _hidden_probability(lane, left, right, lo, hi, start, sigma, reach):
-    """Parts of lane k are lo/hi[start[k]:start[k + 1]], sorted and disjoint (a few)."""
+    """Parts of lane k are lo/hi[start[k]:start[k + 1]], sorted and disjoint (a few). A
+    particle equal to the one before it (resampling makes copies, and sorting puts them side
+    by side) takes its q without the normal CDFs."""
     q = np.zeros(len(lane))
     inv = 1.0 / sigma
     for i in range(len(lane)):
         k = lane[i]
         first = start[k]
         li, ri = left[i], right[i]
+        if i > 0 and li == left[i - 1] and ri == right[i - 1] and k == lane[i - 1]:
+            q[i] = q[i - 1]
+            continue
         total = 0.0
         # from the last part, skip those starting beyond reach of the left end, then add
         # while a part can hold the right end (ends grow with the index: parts are disjoint)
