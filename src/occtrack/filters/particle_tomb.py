@@ -499,7 +499,10 @@ def _update(x, w, r, uw, miss, w_miss, p_miss, p_hit, w_hit, ti, mj, hit_pair, p
         coef = p_miss[i] * r[i] / max(w_miss[i], 1e-300)
         for k in range(N):
             post[i, k] = coef * w[i, k] * miss[i * N + k]
-    acc = np.empty(N)
+    # A track's pairs are summed as np.add.reduceat summed them: the first pair's term plus
+    # the running sum of the others' terms.
+    head = np.empty(N)
+    rest = np.empty(N)
     pairs = len(ti)
     p = 0
     while p < pairs:
@@ -510,13 +513,20 @@ def _update(x, w, r, uw, miss, w_miss, p_miss, p_hit, w_hit, ti, mj, hit_pair, p
             scale = p_hit[i, j] / max(w_hit[i, j], 1e-300) * r[i] * pd
             if q == p:
                 for k in range(N):
-                    acc[k] = scale * hit_pair[q, k]
+                    head[k] = scale * hit_pair[q, k]
+            elif q == p + 1:
+                for k in range(N):
+                    rest[k] = scale * hit_pair[q, k]
             else:
                 for k in range(N):
-                    acc[k] += scale * hit_pair[q, k]
+                    rest[k] += scale * hit_pair[q, k]
             q += 1
-        for k in range(N):
-            post[i, k] += acc[k]
+        if q == p + 1:
+            for k in range(N):
+                post[i, k] += head[k]
+        else:
+            for k in range(N):
+                post[i, k] += head[k] + rest[k]
         p = q
     for i in range(n):
         r_post = _row_sum(post[i])

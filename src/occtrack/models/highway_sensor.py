@@ -133,37 +133,8 @@ class MeasurementModel:
         half = self.half_length
         lmin, lmax = self.clutter_lengths
         c = 1.0 / (self.n_lanes * 2.0 * half * (lmax - lmin))
-        lh, rh = scan.left_hidden, scan.right_hidden
-        s_lo = np.maximum(scan.left[:, 0], -half)
-        s_hi = np.minimum(scan.left[:, 1], half)
-        e_lo, e_hi = scan.right[:, 0], scan.right[:, 1]
-        out = np.zeros(len(scan))
-        seen_s = (scan.left[:, 0] >= -half) & (scan.left[:, 0] <= half)
-        vv = ~lh & ~rh
-        gap = e_lo - scan.left[:, 0]
-        out[vv] = (seen_s & (gap >= lmin) & (gap <= lmax))[vv]
-        hv = lh & ~rh
-        out[hv] = _overlap(s_lo, s_hi, e_lo - lmax, e_lo - lmin)[hv]
-        vh = ~lh & rh
-        out[vh] = (seen_s * _overlap(e_lo, e_hi, scan.left[:, 0] + lmin,
-                                     scan.left[:, 0] + lmax))[vh]
-        hh = lh & rh
-        if hh.any():
-            out[hh] = _band_area(s_lo[hh], s_hi[hh], e_lo[hh], e_hi[hh], lmin, lmax)
-        return c * out
-
-
-def _overlap(a0, a1, b0, b1):
-    return np.clip(np.minimum(a1, b1) - np.maximum(a0, b0), 0.0, None)
-
-
-def _band_area(s0, s1, e0, e1, lmin, lmax):
-    """Area of {(s, e): s in [s0, s1], e in [e0, e1], lmin <= e - s <= lmax}: the integral over
-    s of a piecewise-linear overlap, exact by the trapezoid rule on its breakpoints."""
-    knots = np.stack([s0, s1, e0 - lmax, e0 - lmin, e1 - lmax, e1 - lmin], axis=1)
-    knots = np.sort(np.clip(knots, s0[:, None], np.maximum(s0, s1)[:, None]), axis=1)
-    width = _overlap(e0[:, None], e1[:, None], knots + lmin, knots + lmax)
-    return np.sum(0.5 * (width[:, 1:] + width[:, :-1]) * np.diff(knots, axis=1), axis=1)
+        return _clutter_density(scan.left, scan.right, scan.left_hidden, scan.right_hidden,
+                                half, lmin, lmax, c)
 
 
 # -- compiled loops (numba): one pass over the particles, no temporaries ----------------------
@@ -318,3 +289,45 @@ def _hidden_probability(lane, left, right, lo, hi, start, sigma, reach):
                       * (_ndtr((b - ri) * inv) - _ndtr((a - ri) * inv)))
         q[i] = min(max(total, 0.0), 1.0)
     return q
+
+
+@njit
+def _overlap(a0, a1, b0, b1):
+    """Length of [a0, a1] intersected with [b0, b1] (0 if they do not meet)."""
+    return max(min(a1, b1) - max(a0, b0), 0.0)
+
+
+@njit
+def _clutter_density(left, right, left_hidden, right_hidden, half, lmin, lmax, c):
+    """c times: for two seen ends, 1 if the left end is on the section and the length within
+    [lmin, lmax]; for one hidden end, the length of its interval that such a shape allows;
+    for two, the area of {(s, e) in the two intervals: lmin <= e - s <= lmax}, exact by the
+    trapezoid rule on the breakpoints of the piecewise-linear overlap."""
+    m = len(left)
+    out = np.empty(m)
+    knots = np.empty(6)
+    for j in range(m):
+        l0, l1, r0, r1 = left[j, 0], left[j, 1], right[j, 0], right[j, 1]
+        seen = 1.0 if -half <= l0 <= half else 0.0
+        if not left_hidden[j] and not right_hidden[j]:
+            gap = r0 - l0
+            v = seen if lmin <= gap <= lmax else 0.0
+        elif not right_hidden[j]:
+            v = _overlap(max(l0, -half), min(l1, half), r0 - lmax, r0 - lmin)
+        elif not left_hidden[j]:
+            v = seen * _overlap(r0, r1, l0 + lmin, l0 + lmax)
+        else:
+            s0, s1 = max(l0, -half), min(l1, half)
+            top = max(s0, s1)
+            knots[0], knots[1], knots[2] = s0, s1, r0 - lmax
+            knots[3], knots[4], knots[5] = r0 - lmin, r1 - lmax, r1 - lmin
+            for t in range(6):
+                knots[t] = min(max(knots[t], s0), top)
+            knots.sort()
+            v = 0.0
+            for t in range(5):
+                w0 = _overlap(r0, r1, knots[t] + lmin, knots[t] + lmax)
+                w1 = _overlap(r0, r1, knots[t + 1] + lmin, knots[t + 1] + lmax)
+                v += 0.5 * (w1 + w0) * (knots[t + 1] - knots[t])
+        out[j] = c * v
+    return out
