@@ -59,7 +59,8 @@ class NumpyStep(HighwayTracker):
             weights=np.concatenate([w.ravel(), uw.ravel()]),
             owner=np.concatenate([np.repeat(np.arange(n), N), np.full(uw.size, -1)]),
             existence=r.copy(), measurements=scan, measurement_model=self.model,
-            lane=np.concatenate([np.repeat(lane, N), self._lanes_u]))
+            lane=np.concatenate([np.repeat(lane, N),
+                                 np.repeat(np.arange(self.n_lanes), ux.shape[1])]))
         terms = self.occlusion.terms(ctx)
         v = terms.visible
         miss = 1.0 - pd * v + pd * v * terms.hidden

@@ -88,17 +88,24 @@ class HighwayTracker:
         self.n_lanes = road.n_lanes
         self.direction = road.directions
         s, n = c.max_tracks, c.particles
-        self.x = np.zeros((s, n, 3))
-        self.w = np.zeros((s, n))
+        nu, nb = c.undetected_particles, c.birth_particles
+        # All particles in one array, the Poisson part's first: the first u + n N rows are
+        # what the occlusion handler sees, without copying (u: Poisson particles).
+        u = self.n_lanes * (nu + nb)
+        self._flat_x = np.zeros((u + s * n, 3))
+        self._flat_w = np.zeros(u + s * n)
+        self._flat_owner = np.r_[np.full(u, -1), np.repeat(np.arange(s), n)]
+        self._flat_lane = np.r_[np.repeat(np.arange(self.n_lanes), nu + nb),
+                                np.zeros(s * n, np.int64)]
+        self.ux = self._flat_x[:u].reshape(self.n_lanes, nu + nb, 3)
+        self.uw = self._flat_w[:u].reshape(self.n_lanes, nu + nb)
+        self.x = self._flat_x[u:].reshape(s, n, 3)
+        self.w = self._flat_w[u:].reshape(s, n)
         self.r = np.zeros(s)
         self.lane = np.zeros(s, np.int64)
         self.label = np.zeros(s, np.int64)
         self.n = 0
         self.next_label = 0
-        nu, nb = c.undetected_particles, c.birth_particles
-        self.ux = np.zeros((self.n_lanes, nu + nb, 3))
-        self.uw = np.zeros((self.n_lanes, nu + nb))
-        self._lanes_u = np.repeat(np.arange(self.n_lanes), nu + nb)
         self._sobol = qmc.Sobol(3, scramble=True, seed=self.rng).random(nb)
         self.last_iterations = 0
 
@@ -117,17 +124,13 @@ class HighwayTracker:
                  shift, self.direction, c.road.half_length, c.survival, c.min_speed,
                  c.max_speed, c.min_length, c.max_length, c.birth_rate / c.birth_particles)
 
-        # 2. Occlusion terms of every particle.
-        ctx = HighwayContext(
-            means=np.concatenate([x.reshape(-1, 3), ux.reshape(-1, 3)]),
-            covs=None,
-            weights=np.concatenate([w.ravel(), uw.ravel()]),
-            owner=np.concatenate([np.repeat(np.arange(n), N), np.full(uw.size, -1)]),
-            existence=r.copy(),
-            measurements=scan,
-            measurement_model=self.model,
-            lane=np.concatenate([np.repeat(lane, N), self._lanes_u]),
-        )
+        # 2. Occlusion terms of every particle (the Poisson part's first).
+        k = uw.size + n * N
+        self._flat_lane[uw.size:k].reshape(n, N)[:] = lane[:, None]
+        ctx = HighwayContext(means=self._flat_x[:k], covs=None, weights=self._flat_w[:k],
+                             owner=self._flat_owner[:k], existence=r.copy(),
+                             measurements=scan, measurement_model=self.model,
+                             lane=self._flat_lane[:k])
         terms = self.occlusion.terms(ctx)
 
         # 3. Association weights and marginals.
@@ -388,8 +391,8 @@ def _window(row, lo, hi):
 @njit
 def _associate(x, w, r, lane, ux, uw, visible, hidden, pd, z_lane, z_left, z_right, z_lh,
                z_rh, clutter, sigma, tail, reach, shift):
-    """Steps 2-3 after the occlusion handler: miss terms of every particle (flat: the tracks'
-    particles, then the Poisson part's), each track's miss weight, the Poisson part's hit
+    """Steps 2-3 after the occlusion handler: miss terms of every particle (flat: the Poisson
+    part's particles, then the tracks'), each track's miss weight, the Poisson part's hit
     weights and each measurement's new-object weight, the gated (track, measurement) pairs
     with their particles' hit weights, and the hit weight of every pair.
 
@@ -406,15 +409,15 @@ def _associate(x, w, r, lane, ux, uw, visible, hidden, pd, z_lane, z_left, z_rig
     for k in range(len(visible)):
         pv = pd * visible[k]
         miss[k] = 1.0 - pv + pv * hidden[k]
-    row = np.empty(max(N, per_lane))
+    base = lanes * per_lane
+    row = np.empty(N)
     w_miss = np.empty(n)
     for i in range(n):
         for k in range(N):
-            row[k] = w[i, k] * miss[i * N + k]
-        w_miss[i] = 1.0 - r[i] + r[i] * _row_sum(row[:N])
+            row[k] = w[i, k] * miss[base + i * N + k]
+        w_miss[i] = 1.0 - r[i] + r[i] * _row_sum(row)
 
     # the Poisson part
-    base = n * N
     first = np.zeros(m, np.int64)
     count = np.zeros(m, np.int64)
     key = np.empty(per_lane)
@@ -440,10 +443,10 @@ def _associate(x, w, r, lane, ux, uw, visible, hidden, pd, z_lane, z_left, z_rig
         zr0, zr1, rh = z_right[j, 0], z_right[j, 1], z_rh[j]
         for k in range(count[j]):
             p = f0 + k
-            wv = uw[lj, p] * visible[base + lj * per_lane + p]
+            wv = uw[lj, p] * visible[lj * per_lane + p]
             lo = ux[lj, p, 0]
             if (k > 0 and lo == ux[lj, p - 1, 0] and ux[lj, p, 1] == ux[lj, p - 1, 1]
-                    and wv == uw[lj, p - 1] * visible[base + lj * per_lane + p - 1]):
+                    and wv == uw[lj, p - 1] * visible[lj * per_lane + p - 1]):
                 hit_u[j, k] = hit_u[j, k - 1]  # a copy (resampling), beside its original
                 continue
             hit_u[j, k] = wv * _both_orders(lo, lo + ux[lj, p, 1], zl0, zl1, lh, zr0, zr1, rh,
@@ -481,7 +484,7 @@ def _associate(x, w, r, lane, ux, uw, visible, hidden, pd, z_lane, z_left, z_rig
         zr0, zr1, rh = z_right[j, 0], z_right[j, 1], z_rh[j]
         for k in range(N):
             lo = x[i, k, 0]
-            hit_pair[p, k] = (w[i, k] * visible[i * N + k]) * _both_orders(
+            hit_pair[p, k] = (w[i, k] * visible[base + i * N + k]) * _both_orders(
                 lo, lo + x[i, k, 1], zl0, zl1, lh, zr0, zr1, rh, inv, tail)
         w_hit[i, j] = r[i] * pd * _row_sum(hit_pair[p])
     return w_miss, miss, w_new, e, first, hit_u, ti, mj, hit_pair, w_hit
@@ -494,11 +497,13 @@ def _update(x, w, r, uw, miss, w_miss, p_miss, p_hit, w_hit, ti, mj, hit_pair, p
     posteriors (existence and normalised weights), the Poisson part keeps its miss term.
     Returns the existence of the track each measurement would start."""
     n, N = w.shape
+    lanes, per_lane = uw.shape
+    base = lanes * per_lane
     post = np.empty((n, N))
     for i in range(n):
         coef = p_miss[i] * r[i] / max(w_miss[i], 1e-300)
         for k in range(N):
-            post[i, k] = coef * w[i, k] * miss[i * N + k]
+            post[i, k] = coef * w[i, k] * miss[base + i * N + k]
     # A track's pairs are summed as np.add.reduceat summed them: the first pair's term plus
     # the running sum of the others' terms.
     head = np.empty(N)
@@ -534,11 +539,9 @@ def _update(x, w, r, uw, miss, w_miss, p_miss, p_hit, w_hit, ti, mj, hit_pair, p
         scale = r_post if r_post > 0 else 1.0
         for k in range(N):
             w[i, k] = post[i, k] / scale
-    lanes, per_lane = uw.shape
-    base = n * N
     for lane in range(lanes):
         for k in range(per_lane):
-            uw[lane, k] *= miss[base + lane * per_lane + k]
+            uw[lane, k] *= miss[lane * per_lane + k]
     r_born = np.empty(len(e))
     for j in range(len(e)):
         r_born[j] = p_new[j] * e[j] / max(w_new[j], 1e-300)
