@@ -171,16 +171,24 @@ def _end_term(e, z_lo, z_hi, hidden, inv_sigma, tail):
 
 
 @njit
+def _near(e, z_lo, z_hi, hidden, inv_sigma, tail):
+    """Whether `_end_term` is computed rather than taken as 0 (within `tail` sigma)."""
+    lo = (z_lo - e) * inv_sigma
+    if hidden:
+        return not ((z_hi - e) * inv_sigma < -tail or lo > tail)
+    return not lo * lo > tail * tail
+
+
+@njit
 def _both_orders(lo, hi, zl0, zl1, lh, zr0, zr1, rh, inv, tail):
-    """p(z | ends lo, hi) summed over the two orders of the two ends; the second factor of a
-    product is skipped where the first is 0 (most particles are far from most measurements)."""
+    """p(z | ends lo, hi) summed over the two orders of the two ends; a product is computed
+    only where both its ends are near (most particles are far from most measurements, and
+    the reversed order is far for all but the shortest shapes)."""
     total = 0.0
-    f = _end_term(lo, zl0, zl1, lh, inv, tail)
-    if f != 0.0:
-        total += f * _end_term(hi, zr0, zr1, rh, inv, tail)
-    f = _end_term(hi, zl0, zl1, lh, inv, tail)
-    if f != 0.0:
-        total += f * _end_term(lo, zr0, zr1, rh, inv, tail)
+    if _near(lo, zl0, zl1, lh, inv, tail) and _near(hi, zr0, zr1, rh, inv, tail):
+        total += _end_term(lo, zl0, zl1, lh, inv, tail) * _end_term(hi, zr0, zr1, rh, inv, tail)
+    if _near(hi, zl0, zl1, lh, inv, tail) and _near(lo, zr0, zr1, rh, inv, tail):
+        total += _end_term(hi, zl0, zl1, lh, inv, tail) * _end_term(lo, zr0, zr1, rh, inv, tail)
     return total
 
 
