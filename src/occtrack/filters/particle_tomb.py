@@ -24,8 +24,13 @@ PMB, the "TOMB" of the paper, with the Poisson part's hits starting new tracks).
    `prune_threshold`; report those above `report_threshold` (existence-weighted means).
 
 All tracks of all lanes are handled at once: arrays (tracks, particles, 3) of fixed capacity,
-operations over particles and (track, measurement) pairs vectorised with numpy. Only pairs in
-the same lane whose particle ends come within 6 sigma of the measured ends are scored.
+one array with the Poisson part's particles, so the occlusion handler gets them all without a
+copy. Only pairs in the same lane whose particle ends come within 6 sigma of the measured ends
+are scored. A step is a few compiled loops (numba; predict, associate, update, resample,
+recycle), one pass over the particles each: as numpy array expressions it was about a hundred
+array calls, whose overhead, not the arithmetic, set the speed. The loops sum in numpy's
+order (pairwise), so they give the numbers the array code gave, to the last bit
+(tests/test_highway_kernels.py keeps that code as the reference).
 
 Written here because no well-kept library has a track-oriented multi-Bernoulli filter over
 particles with a pluggable occlusion step (Stone Soup's particle filters are single-object and
@@ -239,9 +244,6 @@ class HighwayTracker:
 
 
 # -- compiled loops (numba): one call per stage of a step, one pass over the particles each ---
-#
-# Sums over a row of particles are numpy's pairwise sums (`_row_sum`), so that every number
-# is the one the whole-array numpy code gave, bit for bit.
 
 @njit
 def _row_sum(a):
