@@ -433,6 +433,8 @@ def _associate(x, w, r, lane, ux, uw, visible, hidden, pd, z_lane, z_left, z_rig
             hit_u[j, k] = wv * _both_orders(lo, lo + ux[lj, p, 1], zl0, zl1, lh, zr0, zr1, rh,
                                             inv, tail)
         e[j] = pd * _row_sum(hit_u[j])
+        # A floor far below any real weight: outside the clutter's support (e.g. a car
+        # entering) w_new may be 0, which loopy belief propagation cannot divide by.
         w_new[j] = max(clutter[j] + e[j], 1e-12)
 
     # the tracks: gate, then score the pairs
