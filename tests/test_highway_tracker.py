@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -136,7 +138,9 @@ def _context(seed: int = 0):
         name = "spy"
 
         def terms(self, ctx):
-            captured.append(ctx)
+            # the context's arrays are the tracker's own, valid during the call: keep copies
+            captured.append(replace(ctx, means=ctx.means.copy(), weights=ctx.weights.copy(),
+                                    owner=ctx.owner.copy(), lane=ctx.lane.copy()))
             return inner.terms(ctx)
 
     filt.occlusion = Spy()

@@ -24,8 +24,13 @@ PMB, the "TOMB" of the paper, with the Poisson part's hits starting new tracks).
    `prune_threshold`; report those above `report_threshold` (existence-weighted means).
 
 All tracks of all lanes are handled at once: arrays (tracks, particles, 3) of fixed capacity,
-operations over particles and (track, measurement) pairs vectorised with numpy. Only pairs in
-the same lane whose particle ends come within 6 sigma of the measured ends are scored.
+one array with the Poisson part's particles, so the occlusion handler gets them all without a
+copy. Only pairs in the same lane whose particle ends come within 6 sigma of the measured ends
+are scored. A step is a few compiled loops (numba; predict, associate, update, resample,
+recycle), one pass over the particles each: as numpy array expressions it was about a hundred
+array calls, whose overhead, not the arithmetic, set the speed. The loops sum in numpy's
+order (pairwise), so they give the numbers the array code gave, to the last bit
+(tests/test_highway_kernels.py keeps that code as the reference).
 
 Written here because no well-kept library has a track-oriented multi-Bernoulli filter over
 particles with a pluggable occlusion step (Stone Soup's particle filters are single-object and
@@ -39,12 +44,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from scipy.stats import qmc
 
 from occtrack.association import lbp_marginals
 from occtrack.config.highway import HighwayTrackerConfig
-from occtrack.models.highway_sensor import MeasurementModel, Scan
+from occtrack.jit import njit
+from occtrack.models.highway_sensor import MeasurementModel, Scan, _both_orders
 from occtrack.occlusion.highway import HighwayContext, make_occlusion
 
 
@@ -88,33 +93,26 @@ class HighwayTracker:
         self.n_lanes = road.n_lanes
         self.direction = road.directions
         s, n = c.max_tracks, c.particles
-        self.x = np.zeros((s, n, 3))
-        self.w = np.zeros((s, n))
+        nu, nb = c.undetected_particles, c.birth_particles
+        # All particles in one array, the Poisson part's first: the first u + n N rows are
+        # what the occlusion handler sees, without copying (u: Poisson particles).
+        u = self.n_lanes * (nu + nb)
+        self._flat_x = np.zeros((u + s * n, 3))
+        self._flat_w = np.zeros(u + s * n)
+        self._flat_owner = np.r_[np.full(u, -1), np.repeat(np.arange(s), n)]
+        self._flat_lane = np.r_[np.repeat(np.arange(self.n_lanes), nu + nb),
+                                np.zeros(s * n, np.int64)]
+        self.ux = self._flat_x[:u].reshape(self.n_lanes, nu + nb, 3)
+        self.uw = self._flat_w[:u].reshape(self.n_lanes, nu + nb)
+        self.x = self._flat_x[u:].reshape(s, n, 3)
+        self.w = self._flat_w[u:].reshape(s, n)
         self.r = np.zeros(s)
         self.lane = np.zeros(s, np.int64)
         self.label = np.zeros(s, np.int64)
         self.n = 0
         self.next_label = 0
-        nu, nb = c.undetected_particles, c.birth_particles
-        self.ux = np.zeros((self.n_lanes, nu + nb, 3))
-        self.uw = np.zeros((self.n_lanes, nu + nb))
-        self._lanes_u = np.repeat(np.arange(self.n_lanes), nu + nb)
         self._sobol = qmc.Sobol(3, scramble=True, seed=self.rng).random(nb)
         self.last_iterations = 0
-
-    # -- model pieces -------------------------------------------------------------------------
-    def _births(self) -> np.ndarray:
-        """Cars that entered within the last step: front up to one step past the entry. Drawn
-        as a randomly shifted scrambled Sobol set (randomised quasi-Monte Carlo): unbiased like
-        plain draws, but it covers the box of (speed, length, entry fraction) more evenly."""
-        c, rng = self.config, self.rng
-        u = (self._sobol[None] + rng.random((self.n_lanes, 1, 3))) % 1.0
-        speed = c.min_speed + (c.max_speed - c.min_speed) * u[..., 0]
-        length = c.min_length + (c.max_length - c.min_length) * u[..., 1]
-        front = -c.road.half_length + speed * u[..., 2]
-        d = self.direction[:, None]
-        left = np.where(d > 0, front - length, -front)
-        return np.stack([left, length, d * speed], axis=-1)
 
     # -- one step -----------------------------------------------------------------------------
     def step(self, scan: Scan) -> Estimates:
@@ -122,77 +120,51 @@ class HighwayTracker:
         pd = c.detection_probability
         n, N = self.n, c.particles
         x, w, r, lane = self.x[:n], self.w[:n], self.r[:n], self.lane[:n]
-        nu = c.undetected_particles
-
-        # 1. Predict.
-        alive = _advance(x, w, self.direction[lane], c.road.half_length, c.survival)
-        r *= alive
-        w /= np.where(alive > 0, alive, 1.0)[:, None]
         ux, uw = self.ux, self.uw
-        _advance(ux[:, :nu], uw[:, :nu], self.direction, c.road.half_length, c.survival)
-        ux[:, nu:] = self._births()
-        uw[:, nu:] = c.birth_rate / c.birth_particles
-        order = np.argsort(ux[..., 0], axis=1)
-        rows = np.arange(self.n_lanes)[:, None]
-        ux[:], uw[:] = ux[rows, order], uw[rows, order]
 
-        # 2. Occlusion terms of every particle.
-        ctx = HighwayContext(
-            means=np.concatenate([x.reshape(-1, 3), ux.reshape(-1, 3)]),
-            covs=None,
-            weights=np.concatenate([w.ravel(), uw.ravel()]),
-            owner=np.concatenate([np.repeat(np.arange(n), N), np.full(uw.size, -1)]),
-            existence=r.copy(),
-            measurements=scan,
-            measurement_model=self.model,
-            lane=np.concatenate([np.repeat(lane, N), self._lanes_u]),
-        )
+        # 1. Predict tracks and the Poisson part, add the births, sort each lane's Poisson
+        # particles by left end.
+        shift = self.rng.random((self.n_lanes, 3))
+        _predict(x, w, r, self.direction[lane], ux, uw, c.undetected_particles, self._sobol,
+                 shift, self.direction, c.road.half_length, c.survival, c.min_speed,
+                 c.max_speed, c.min_length, c.max_length, c.birth_rate / c.birth_particles)
+        # numpy's vectorised sort is faster here than a compiled loop
+        _reorder(ux, uw, np.argsort(ux[..., 0], axis=1))
+
+        # 2. Occlusion terms of every particle (the Poisson part's first).
+        k = uw.size + n * N
+        self._flat_lane[uw.size:k].reshape(n, N)[:] = lane[:, None]
+        ctx = HighwayContext(means=self._flat_x[:k], covs=None, weights=self._flat_w[:k],
+                             owner=self._flat_owner[:k], existence=r.copy(),
+                             measurements=scan, measurement_model=self.model,
+                             lane=self._flat_lane[:k])
         terms = self.occlusion.terms(ctx)
-        v = terms.visible
-        miss = 1.0 - pd * v + pd * v * terms.hidden
-        v_t, v_u = v[: n * N].reshape(n, N), v[n * N:].reshape(ux.shape[:2])
-        miss_t, miss_u = miss[: n * N].reshape(n, N), miss[n * N:].reshape(ux.shape[:2])
-        m = len(scan)
-        w_miss = 1.0 - r + r * np.sum(w * miss_t, axis=1)
 
         # 3. Association weights and marginals.
-        mlane = scan.lane
-        if m:
-            first_u, count_u, hit_u = self._undetected_hits(scan, uw * v_u)
-            e = pd * hit_u.sum(axis=1)
-            # A floor far below any real weight: outside the clutter's support (e.g. a car
-            # entering) w_new may be 0, which loopy belief propagation cannot divide by.
-            w_new = np.maximum(c.clutter_rate * self.model.clutter_density(scan) + e, 1e-12)
+        m = len(scan)
+        clutter = (c.clutter_rate * self.model.clutter_density(scan) if m else np.empty(0))
+        reach = MeasurementModel.tail * c.noise_std
+        a = _associate(x, w, r, lane, ux, uw, np.ascontiguousarray(terms.visible, float),
+                       np.ascontiguousarray(terms.hidden, float), pd, scan.lane, scan.left,
+                       scan.right, scan.left_hidden, scan.right_hidden, clutter,
+                       self.model.sigma, MeasurementModel.tail, reach,
+                       1e3 * (c.road.half_length + c.max_length + reach))
+        w_miss, miss, w_new, e, first_u, hit_u, ti, mj, hit_pair, w_hit = a
         if m and n:
-            ti, mj = self._pairs(x, lane, scan)
-            # hit_pair[p, k] = w v p(z | x) of track ti[p]'s particle k and measurement mj[p]
-            hit_pair = self.model.hit_weights(x, w * v_t, ti, np.zeros_like(ti),
-                                              np.full_like(ti, N), N, scan, mj)
-            w_hit = np.zeros((n, m))
-            w_hit[ti, mj] = r[ti] * pd * hit_pair.sum(axis=1)
             marg = lbp_marginals(w_hit, w_miss, w_new, c.lbp_tol, c.lbp_max_iter)
             self.last_iterations = marg.iterations
             p_hit, p_miss, p_new = marg.p_hit, marg.p_miss, marg.p_new
         else:
-            p_miss = np.ones(n)
-            p_new = np.ones(m)
+            p_hit, p_miss, p_new = np.zeros((n, m)), np.ones(n), np.ones(m)
 
         # 4. Update tracks, the Poisson part, and start new tracks.
-        post = (p_miss * r / np.maximum(w_miss, 1e-300))[:, None] * w * miss_t
-        if m and n and len(ti):
-            gain = p_hit[ti, mj] / np.maximum(w_hit[ti, mj], 1e-300)
-            # Pairs come grouped by track (np.nonzero order): add each group's rows at once.
-            first = np.flatnonzero(np.diff(ti, prepend=-1))
-            post[ti[first]] += np.add.reduceat((gain * r[ti] * pd)[:, None] * hit_pair, first)
-        r_post = post.sum(axis=1)
-        r[:] = np.clip(r_post, 0.0, 1.0)
-        w[:] = post / np.where(r_post > 0, r_post, 1.0)[:, None]
-        uw *= miss_u
+        r_born = _update(x, w, r, uw, miss, w_miss, p_miss, p_hit, w_hit, ti, mj, hit_pair,
+                         p_new, e, w_new, pd)
         if m:
-            r_born = p_new * e / np.maximum(w_new, 1e-300)
             born = np.flatnonzero(r_born > c.prune_threshold)
             if len(born):
                 # the Poisson particles each measurement saw (padding has weight 0)
+                mlane = scan.lane
                 width = hit_u.shape[1]
                 at = np.minimum(first_u[born, None] + np.arange(width), ux.shape[1] - 1)
                 self._start_tracks(ux[mlane[born, None], at], hit_u[born], r_born[born],
@@ -200,44 +172,9 @@ class HighwayTracker:
 
         # 5. Resample, regularise, prune; recycle the Poisson particles.
         self._resample_tracks()
-        self._resample_undetected()
+        _recycle(ux, uw, c.undetected_particles, self.rng.random(self.n_lanes))
         self._prune()
         return self.estimates()
-
-    def _undetected_hits(self, scan: Scan, wv_u: np.ndarray):
-        """For each measurement, the Poisson particles of its lane whose left end lies within
-        6 sigma of the measured shape (a slice of the lane's particles, sorted by left end):
-        the slice's first index and length, and the hit weights w v p(z | x) (m, width),
-        0 past each slice's end."""
-        reach = MeasurementModel.tail * self.config.noise_std
-        per_lane = self.ux.shape[1]
-        lane = scan.lane
-        lo = scan.left[:, 0] - reach
-        hi = np.maximum(scan.left[:, 1], scan.right[:, 1]) + reach
-        # Rows are sorted; a lane offset far beyond the road makes the whole array sorted.
-        shift = 1e3 * (self.config.road.half_length + self.config.max_length + reach)
-        keys = (self.ux[..., 0] + shift * np.arange(self.n_lanes)[:, None]).ravel()
-        key = lane * per_lane
-        first = np.searchsorted(keys, lo + shift * lane) - key
-        count = np.searchsorted(keys, hi + shift * lane, side="right") - key - first
-        width = max(int(np.max(count)), 1)
-        hit = self.model.hit_weights(self.ux, wv_u, lane, first, count, width, scan,
-                                     np.arange(len(scan)))
-        return first, count, hit
-
-    def _pairs(self, x: np.ndarray, lane: np.ndarray, scan: Scan):
-        """(track, measurement) pairs of one lane whose ends can match, grouped by track."""
-        reach = MeasurementModel.tail * self.config.noise_std
-        left = x[..., 0]
-        right = left + x[..., 1]
-        l_min, l_max = left.min(axis=1), left.max(axis=1)
-        r_min, r_max = right.min(axis=1), right.max(axis=1)
-        gate = ((lane[:, None] == scan.lane[None, :])
-                & (l_min[:, None] - reach <= scan.left[None, :, 1])
-                & (l_max[:, None] + reach >= scan.left[None, :, 0])
-                & (r_min[:, None] - reach <= scan.right[None, :, 1])
-                & (r_max[:, None] + reach >= scan.right[None, :, 0]))
-        return np.nonzero(gate)
 
     def _start_tracks(self, particles: np.ndarray, weights: np.ndarray, existence: np.ndarray,
                       lane: np.ndarray) -> None:
@@ -253,9 +190,8 @@ class HighwayTracker:
         k = len(existence)
         if k == 0:
             return
-        idx = systematic_resample(weights, c.particles, self.rng)
         s = slice(self.n, self.n + k)
-        self.x[s] = self._regularise(idx, particles, weights, lane)
+        self.x[s] = self._resample_move(particles, weights, lane)
         self.w[s] = 1.0 / c.particles
         self.r[s], self.lane[s] = existence, lane
         self.label[s] = self.next_label + np.arange(k)
@@ -266,39 +202,27 @@ class HighwayTracker:
         n, c = self.n, self.config
         if n == 0:
             return
-        w = self.w[:n]
-        ess = 1.0 / np.maximum(np.sum(w * w, axis=1), 1e-300)
-        rows = np.flatnonzero((ess < c.resample_threshold * c.particles) & (self.r[:n] > 0))
+        rows = _degenerate(self.w[:n], self.r[:n], c.resample_threshold * c.particles)
         if len(rows) == 0:
             return
-        x, wr, lane = self.x[rows], w[rows], self.lane[rows]
-        idx = systematic_resample(wr, c.particles, self.rng)
-        self.x[rows] = self._regularise(idx, x, wr, lane)
+        self.x[rows] = self._resample_move(self.x[rows], self.w[rows], self.lane[rows])
         self.w[rows] = 1.0 / c.particles
 
-    def _regularise(self, idx: np.ndarray, x: np.ndarray, w: np.ndarray,
-                    lane: np.ndarray) -> np.ndarray:
-        """The particles x[row, idx] resampled from the weighted clouds (x, w), moved by the
-        Liu-West kernel: xs <- a xs + (1 - a) mean + h chol(cov) eps, a = sqrt(1 - h^2), with
-        the mean and covariance of the cloud before resampling (less noisy); then back into
-        the prior's support."""
+    def _resample_move(self, x: np.ndarray, w: np.ndarray, lane: np.ndarray) -> np.ndarray:
+        """`config.particles` particles drawn from each weighted cloud (x, w) by systematic
+        resampling, then moved by the Liu-West kernel: xs <- a xs + (1 - a) mean + h chol(cov)
+        eps, a = sqrt(1 - h^2), with the mean and covariance of the cloud before resampling
+        (less noisy); then back into the prior's support."""
         c = self.config
         h = c.kernel_bandwidth
+        x = np.ascontiguousarray(x, dtype=float)
+        w = np.ascontiguousarray(w, dtype=float)
+        u0 = self.rng.random(len(w))
         if h == 0:
-            return x[np.arange(len(x))[:, None], idx]
-        eps = self.rng.standard_normal(idx.shape + (3,), dtype=np.float32)
-        return _liu_west(np.ascontiguousarray(x, dtype=float),
-                         np.ascontiguousarray(w, dtype=float), idx, eps, h,
-                         self.direction[lane].astype(float), c.min_length, c.max_length,
-                         c.min_speed, c.max_speed)
-
-    def _resample_undetected(self) -> None:
-        c = self.config
-        nu = c.undetected_particles
-        total = self.uw.sum(axis=1)
-        idx = systematic_resample(self.uw, nu, self.rng)
-        self.ux[:, :nu] = self.ux[np.arange(self.n_lanes)[:, None], idx]
-        self.uw[:, :nu] = (total / nu)[:, None]
+            return x[np.arange(len(x))[:, None], _systematic(w, u0, c.particles)]
+        eps = self.rng.standard_normal((len(w), c.particles, 3), dtype=np.float32)
+        return _resample_move(x, w, u0, eps, h, self.direction[lane].astype(float),
+                              c.min_length, c.max_length, c.min_speed, c.max_speed)
 
     def _prune(self) -> None:
         keep = np.flatnonzero(self.r[: self.n] >= self.config.prune_threshold)
@@ -319,27 +243,325 @@ class HighwayTracker:
                          mean[:, 2], self.r[sel].copy())
 
 
-# -- compiled loops (numba): prediction, resampling and the kernel move, one pass per track ---
+# -- compiled loops (numba): one call per stage of a step, one pass over the particles each ---
 
-@njit(cache=True)
+@njit
+def _row_sum(a):
+    """np.sum of a contiguous 1-D array, in numpy's order: pairwise over blocks of 128, each
+    block summed in 8 interleaved partial sums. Keeping the order keeps the results of the
+    numpy code this replaced, to the last bit."""
+    n = len(a)
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[i]
+        return res
+    if n <= 128:
+        r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
+        r4, r5, r6, r7 = a[4], a[5], a[6], a[7]
+        i = 8
+        stop = n - n % 8
+        while i < stop:
+            r0 += a[i]
+            r1 += a[i + 1]
+            r2 += a[i + 2]
+            r3 += a[i + 3]
+            r4 += a[i + 4]
+            r5 += a[i + 5]
+            r6 += a[i + 6]
+            r7 += a[i + 7]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[i]
+            i += 1
+        return res
+    half = n // 2
+    half -= half % 8
+    return _row_sum(a[:half]) + _row_sum(a[half:])
+
+
+@njit
 def _advance(x, w, direction, half, survival):
     """Constant speed for one step, then P_S: `survival` while the rear is on the section, else
     0, applied to the weights in place. Returns each row's surviving weight."""
     rows, n = w.shape
     alive = np.zeros(rows)
     for i in range(rows):
+        total = 0.0
+        forward = direction[i] > 0
         for k in range(n):
-            x[i, k, 0] += x[i, k, 2]
-            rear = x[i, k, 0] if direction[i] > 0 else -(x[i, k, 0] + x[i, k, 1])
+            left = x[i, k, 0] + x[i, k, 2]
+            x[i, k, 0] = left
+            rear = left if forward else -(left + x[i, k, 1])
             if rear >= half:
                 w[i, k] = 0.0
             else:
                 w[i, k] *= survival
-                alive[i] += w[i, k]
+                total += w[i, k]
+        alive[i] = total
     return alive
 
 
-@njit(cache=True)
+@njit
+def _predict(x, w, r, track_direction, ux, uw, nu, sobol, shift, direction, half, survival,
+             min_speed, max_speed, min_length, max_length, birth_weight):
+    """Step 1 in place: tracks and the Poisson part's first `nu` particles per lane move and
+    survive (`_advance`), each track's existence takes its surviving weight and its weights
+    are normalised again; the last particles of each lane become the births, cars that
+    entered within the last step (front up to one step past the entry). Births are a scrambled
+    Sobol set shifted by `shift[lane]` (randomised quasi-Monte Carlo: unbiased like plain
+    draws, but it covers the box of (speed, length, entry fraction) more evenly)."""
+    alive = _advance(x, w, track_direction, half, survival)
+    for i in range(len(r)):
+        r[i] *= alive[i]
+        scale = alive[i] if alive[i] > 0 else 1.0
+        for k in range(w.shape[1]):
+            w[i, k] /= scale
+    _advance(ux[:, :nu], uw[:, :nu], direction, half, survival)
+    lanes, per_lane = uw.shape
+    u = np.empty(3)
+    for lane in range(lanes):
+        d = direction[lane]
+        for k in range(nu, per_lane):
+            for e in range(3):
+                # (a + b) mod 1 for a, b in [0, 1): the subtraction is exact, as fmod is
+                u[e] = sobol[k - nu, e] + shift[lane, e]
+                if u[e] >= 1.0:
+                    u[e] -= 1.0
+            speed = min_speed + (max_speed - min_speed) * u[0]
+            length = min_length + (max_length - min_length) * u[1]
+            front = -half + speed * u[2]
+            ux[lane, k, 0] = front - length if d > 0 else -front
+            ux[lane, k, 1] = length
+            ux[lane, k, 2] = d * speed
+            uw[lane, k] = birth_weight
+
+
+@njit
+def _reorder(ux, uw, order):
+    """Each lane's particles put in `order[lane]`."""
+    for lane in range(uw.shape[0]):
+        xs = ux[lane][order[lane]]
+        ws = uw[lane][order[lane]]
+        ux[lane] = xs
+        uw[lane] = ws
+
+
+@njit
+def _window(row, lo, hi):
+    """The slice [first, end) of the sorted `row` whose values lie in [lo, hi]."""
+    a, b = 0, len(row)
+    while a < b:
+        mid = (a + b) // 2
+        if row[mid] < lo:
+            a = mid + 1
+        else:
+            b = mid
+    first = a
+    b = len(row)
+    while a < b:
+        mid = (a + b) // 2
+        if row[mid] <= hi:
+            a = mid + 1
+        else:
+            b = mid
+    return first, a
+
+
+@njit
+def _associate(x, w, r, lane, ux, uw, visible, hidden, pd, z_lane, z_left, z_right, z_lh,
+               z_rh, clutter, sigma, tail, reach, shift):
+    """Steps 2-3 after the occlusion handler: miss terms of every particle (flat: the Poisson
+    part's particles, then the tracks'), each track's miss weight, the Poisson part's hit
+    weights and each measurement's new-object weight, the gated (track, measurement) pairs
+    with their particles' hit weights, and the hit weight of every pair.
+
+    The Poisson particles a measurement can have come from are the slice of its lane's
+    (sorted by left end) whose left end lies within `reach` of the measured shape: compared
+    after adding `shift` times the lane number to both sides, as in the flat search over all
+    lanes this replaced. Pairs are those of one lane whose particle ends come within `reach`
+    of the measured ends, grouped by track."""
+    n, N = w.shape
+    lanes, per_lane = uw.shape
+    m = len(z_lane)
+    inv = 1.0 / sigma
+    miss = np.empty(len(visible))
+    for k in range(len(visible)):
+        pv = pd * visible[k]
+        miss[k] = 1.0 - pv + pv * hidden[k]
+    base = lanes * per_lane
+    row = np.empty(N)
+    w_miss = np.empty(n)
+    for i in range(n):
+        for k in range(N):
+            row[k] = w[i, k] * miss[base + i * N + k]
+        w_miss[i] = 1.0 - r[i] + r[i] * _row_sum(row)
+
+    # the Poisson part
+    first = np.zeros(m, np.int64)
+    count = np.zeros(m, np.int64)
+    key = np.empty(per_lane)
+    for j in range(m):
+        lj = z_lane[j]
+        off = shift * lj
+        for k in range(per_lane):
+            key[k] = ux[lj, k, 0] + off
+        lo = z_left[j, 0] - reach
+        hi = max(z_left[j, 1], z_right[j, 1]) + reach
+        a, b = _window(key, lo + off, hi + off)
+        first[j] = a
+        count[j] = b - a
+    width = 1
+    for j in range(m):
+        width = max(width, count[j])
+    hit_u = np.zeros((m, width))
+    e = np.empty(m)
+    w_new = np.empty(m)
+    for j in range(m):
+        lj, f0 = z_lane[j], first[j]
+        zl0, zl1, lh = z_left[j, 0], z_left[j, 1], z_lh[j]
+        zr0, zr1, rh = z_right[j, 0], z_right[j, 1], z_rh[j]
+        for k in range(count[j]):
+            p = f0 + k
+            wv = uw[lj, p] * visible[lj * per_lane + p]
+            lo = ux[lj, p, 0]
+            if (k > 0 and lo == ux[lj, p - 1, 0] and ux[lj, p, 1] == ux[lj, p - 1, 1]
+                    and wv == uw[lj, p - 1] * visible[lj * per_lane + p - 1]):
+                hit_u[j, k] = hit_u[j, k - 1]  # a copy (resampling), beside its original
+                continue
+            hit_u[j, k] = wv * _both_orders(lo, lo + ux[lj, p, 1], zl0, zl1, lh, zr0, zr1, rh,
+                                            inv, tail)
+        e[j] = pd * _row_sum(hit_u[j])
+        # A floor far below any real weight: outside the clutter's support (e.g. a car
+        # entering) w_new may be 0, which loopy belief propagation cannot divide by.
+        w_new[j] = max(clutter[j] + e[j], 1e-12)
+
+    # the tracks: gate, then score the pairs
+    ti = np.empty(n * m, np.int64)
+    mj = np.empty(n * m, np.int64)
+    pairs = 0
+    for i in range(n):
+        l_min = l_max = x[i, 0, 0]
+        r_min = r_max = x[i, 0, 0] + x[i, 0, 1]
+        for k in range(1, N):
+            left = x[i, k, 0]
+            right = left + x[i, k, 1]
+            l_min = min(l_min, left)
+            l_max = max(l_max, left)
+            r_min = min(r_min, right)
+            r_max = max(r_max, right)
+        for j in range(m):
+            if (lane[i] == z_lane[j] and l_min - reach <= z_left[j, 1]
+                    and l_max + reach >= z_left[j, 0] and r_min - reach <= z_right[j, 1]
+                    and r_max + reach >= z_right[j, 0]):
+                ti[pairs] = i
+                mj[pairs] = j
+                pairs += 1
+    ti, mj = ti[:pairs], mj[:pairs]
+    hit_pair = np.empty((pairs, N))
+    w_hit = np.zeros((n, m))
+    for p in range(pairs):
+        i, j = ti[p], mj[p]
+        zl0, zl1, lh = z_left[j, 0], z_left[j, 1], z_lh[j]
+        zr0, zr1, rh = z_right[j, 0], z_right[j, 1], z_rh[j]
+        for k in range(N):
+            lo = x[i, k, 0]
+            hit_pair[p, k] = (w[i, k] * visible[base + i * N + k]) * _both_orders(
+                lo, lo + x[i, k, 1], zl0, zl1, lh, zr0, zr1, rh, inv, tail)
+        w_hit[i, j] = r[i] * pd * _row_sum(hit_pair[p])
+    return w_miss, miss, w_new, e, first, hit_u, ti, mj, hit_pair, w_hit
+
+
+@njit
+def _update(x, w, r, uw, miss, w_miss, p_miss, p_hit, w_hit, ti, mj, hit_pair, p_new, e,
+            w_new, pd):
+    """Step 4 in place: each track becomes the marginal-weighted mixture of its miss and hit
+    posteriors (existence and normalised weights), the Poisson part keeps its miss term.
+    Returns the existence of the track each measurement would start."""
+    n, N = w.shape
+    lanes, per_lane = uw.shape
+    base = lanes * per_lane
+    post = np.empty((n, N))
+    for i in range(n):
+        coef = p_miss[i] * r[i] / max(w_miss[i], 1e-300)
+        for k in range(N):
+            post[i, k] = coef * w[i, k] * miss[base + i * N + k]
+    # A track's pairs are summed as np.add.reduceat summed them: the first pair's term plus
+    # the running sum of the others' terms.
+    head = np.empty(N)
+    rest = np.empty(N)
+    pairs = len(ti)
+    p = 0
+    while p < pairs:
+        i = ti[p]
+        q = p
+        while q < pairs and ti[q] == i:
+            j = mj[q]
+            scale = p_hit[i, j] / max(w_hit[i, j], 1e-300) * r[i] * pd
+            if q == p:
+                for k in range(N):
+                    head[k] = scale * hit_pair[q, k]
+            elif q == p + 1:
+                for k in range(N):
+                    rest[k] = scale * hit_pair[q, k]
+            else:
+                for k in range(N):
+                    rest[k] += scale * hit_pair[q, k]
+            q += 1
+        if q == p + 1:
+            for k in range(N):
+                post[i, k] += head[k]
+        else:
+            for k in range(N):
+                post[i, k] += head[k] + rest[k]
+        p = q
+    for i in range(n):
+        r_post = _row_sum(post[i])
+        r[i] = min(max(r_post, 0.0), 1.0)
+        scale = r_post if r_post > 0 else 1.0
+        for k in range(N):
+            w[i, k] = post[i, k] / scale
+    for lane in range(lanes):
+        for k in range(per_lane):
+            uw[lane, k] *= miss[lane * per_lane + k]
+    r_born = np.empty(len(e))
+    for j in range(len(e)):
+        r_born[j] = p_new[j] * e[j] / max(w_new[j], 1e-300)
+    return r_born
+
+
+@njit
+def _degenerate(w, r, threshold):
+    """Tracks whose effective sample size 1 / sum w^2 is below `threshold` (and r > 0)."""
+    n, N = w.shape
+    sq = np.empty(N)
+    rows = np.empty(n, np.int64)
+    count = 0
+    for i in range(n):
+        for k in range(N):
+            sq[k] = w[i, k] * w[i, k]
+        if 1.0 / max(_row_sum(sq), 1e-300) < threshold and r[i] > 0:
+            rows[count] = i
+            count += 1
+    return rows[:count]
+
+
+@njit
+def _recycle(ux, uw, nu, u0):
+    """The Poisson part's particles of each lane, resampled (systematic) to `nu` of equal
+    weight, their total kept."""
+    lanes, per_lane = uw.shape
+    idx = _systematic(uw, u0, nu)
+    for lane in range(lanes):
+        total = _row_sum(uw[lane])
+        xs = ux[lane][idx[lane]]
+        ux[lane, :nu] = xs
+        for k in range(nu):
+            uw[lane, k] = total / nu
+
+
+@njit
 def _systematic(weights, u0, n_out):
     """Systematic resampling of each row with offset u0[row]: index k is drawn for the points
     (u0 + j) / n_out that fall in its slice of the cumulative weight."""
@@ -361,7 +583,7 @@ def _systematic(weights, u0, n_out):
     return idx
 
 
-@njit(cache=True, inline="always")
+@njit
 def _reflect1(v, lo, hi):
     if v < lo:
         v = 2 * lo - v
@@ -370,7 +592,7 @@ def _reflect1(v, lo, hi):
     return min(max(v, lo), hi)
 
 
-@njit(cache=True)
+@njit
 def _liu_west(x, w, idx, eps, h, direction, min_length, max_length, min_speed, max_speed):
     rows, n_out = idx.shape
     n = x.shape[1]
@@ -413,3 +635,10 @@ def _liu_west(x, w, idx, eps, h, direction, min_length, max_length, min_speed, m
             out[r, j, 1] = _reflect1(out[r, j, 1], min_length, max_length)
             out[r, j, 2] = sign * _reflect1(sign * out[r, j, 2], min_speed, max_speed)
     return out
+
+
+@njit
+def _resample_move(x, w, u0, eps, h, direction, min_length, max_length, min_speed, max_speed):
+    """`_systematic` then `_liu_west`, in one call."""
+    return _liu_west(x, w, _systematic(w, u0, eps.shape[1]), eps, h, direction, min_length,
+                     max_length, min_speed, max_speed)

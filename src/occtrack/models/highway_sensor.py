@@ -20,9 +20,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
-from occtrack.occlusion.extents import union
+from occtrack.jit import njit
 
 
 @dataclass(frozen=True)
@@ -102,15 +101,15 @@ class MeasurementModel:
     def occluded_parts(self, scan: Scan) -> list[tuple[np.ndarray, np.ndarray]]:
         """For each lane, the hidden parts (sorted disjoint intervals, metres in that lane)
         made by the measured shapes of the nearer lanes."""
-        parts = []
-        starts, ends = np.empty(0), np.empty(0)
-        lo, hi = scan.extent
-        for k, d in enumerate(self.distances):
-            parts.append((starts * d, ends * d))
-            sel = scan.lane == k
-            starts, ends = union(np.concatenate((starts, lo[sel] / d)),
-                                 np.concatenate((ends, hi[sel] / d)))
-        return parts
+        lo, hi, start = self._parts(scan)
+        return [(lo[start[k]:start[k + 1]], hi[start[k]:start[k + 1]])
+                for k in range(self.n_lanes)]
+
+    def _parts(self, scan: Scan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`occluded_parts` concatenated: lane k's are lo/hi[start[k]:start[k + 1]]."""
+        ext_lo, ext_hi = scan.extent
+        return _occluded_parts(scan.lane, np.ascontiguousarray(ext_lo),
+                               np.ascontiguousarray(ext_hi), self.distances)
 
     def hidden_probability(self, lane: np.ndarray, left: np.ndarray, right: np.ndarray,
                            scan: Scan, parts=None) -> np.ndarray:
@@ -119,13 +118,11 @@ class MeasurementModel:
         are visited (a binary search, then a walk back), so the cost is in the particles near
         them. `parts`: `occluded_parts(scan)`, if already at hand."""
         if parts is None:
-            parts = self.occluded_parts(scan)
-        count = np.array([len(lo) for lo, _ in parts], np.int64)
-        if count.sum() == 0 or len(lane) == 0:
-            return np.zeros(len(lane))
-        start = np.concatenate(([0], np.cumsum(count)))
-        lo = np.concatenate([p[0] for p in parts])
-        hi = np.concatenate([p[1] for p in parts])
+            lo, hi, start = self._parts(scan)
+        else:
+            start = np.concatenate(([0], np.cumsum([len(p[0]) for p in parts]))).astype(np.int64)
+            lo = np.concatenate([np.asarray(p[0], float) for p in parts])
+            hi = np.concatenate([np.asarray(p[1], float) for p in parts])
         return _hidden_probability(np.asarray(lane, np.int64), np.asarray(left, float),
                                    np.asarray(right, float), lo, hi, start, self.sigma,
                                    self.tail * self.sigma)
@@ -136,37 +133,8 @@ class MeasurementModel:
         half = self.half_length
         lmin, lmax = self.clutter_lengths
         c = 1.0 / (self.n_lanes * 2.0 * half * (lmax - lmin))
-        lh, rh = scan.left_hidden, scan.right_hidden
-        s_lo = np.maximum(scan.left[:, 0], -half)
-        s_hi = np.minimum(scan.left[:, 1], half)
-        e_lo, e_hi = scan.right[:, 0], scan.right[:, 1]
-        out = np.zeros(len(scan))
-        seen_s = (scan.left[:, 0] >= -half) & (scan.left[:, 0] <= half)
-        vv = ~lh & ~rh
-        gap = e_lo - scan.left[:, 0]
-        out[vv] = (seen_s & (gap >= lmin) & (gap <= lmax))[vv]
-        hv = lh & ~rh
-        out[hv] = _overlap(s_lo, s_hi, e_lo - lmax, e_lo - lmin)[hv]
-        vh = ~lh & rh
-        out[vh] = (seen_s * _overlap(e_lo, e_hi, scan.left[:, 0] + lmin,
-                                     scan.left[:, 0] + lmax))[vh]
-        hh = lh & rh
-        if hh.any():
-            out[hh] = _band_area(s_lo[hh], s_hi[hh], e_lo[hh], e_hi[hh], lmin, lmax)
-        return c * out
-
-
-def _overlap(a0, a1, b0, b1):
-    return np.clip(np.minimum(a1, b1) - np.maximum(a0, b0), 0.0, None)
-
-
-def _band_area(s0, s1, e0, e1, lmin, lmax):
-    """Area of {(s, e): s in [s0, s1], e in [e0, e1], lmin <= e - s <= lmax}: the integral over
-    s of a piecewise-linear overlap, exact by the trapezoid rule on its breakpoints."""
-    knots = np.stack([s0, s1, e0 - lmax, e0 - lmin, e1 - lmax, e1 - lmin], axis=1)
-    knots = np.sort(np.clip(knots, s0[:, None], np.maximum(s0, s1)[:, None]), axis=1)
-    width = _overlap(e0[:, None], e1[:, None], knots + lmin, knots + lmax)
-    return np.sum(0.5 * (width[:, 1:] + width[:, :-1]) * np.diff(knots, axis=1), axis=1)
+        return _clutter_density(scan.left, scan.right, scan.left_hidden, scan.right_hidden,
+                                half, lmin, lmax, c)
 
 
 # -- compiled loops (numba): one pass over the particles, no temporaries ----------------------
@@ -175,12 +143,19 @@ _SQRT_HALF = 0.7071067811865476
 _INV_SQRT_2PI = 0.3989422804014327
 
 
-@njit(cache=True, inline="always")
+@njit
 def _ndtr(x):
+    """Phi(x). Beyond 9 (below -39) erfc rounds Phi to exactly 1 (0) in double precision, so
+    those are returned without calling it: the same numbers, for less work where a hidden
+    part is wide against sigma."""
+    if x > 9.0:
+        return 1.0
+    if x < -39.0:
+        return 0.0
     return 0.5 * math.erfc(-x * _SQRT_HALF)
 
 
-@njit(cache=True, inline="always")
+@njit
 def _end_term(e, z_lo, z_hi, hidden, inv_sigma, tail):
     """f(e): N(z; e, sigma^2) for a seen end, P(e + noise in [z_lo, z_hi]) for a hidden one;
     0 beyond `tail` standard deviations."""
@@ -195,21 +170,29 @@ def _end_term(e, z_lo, z_hi, hidden, inv_sigma, tail):
     return math.exp(-0.5 * lo * lo) * _INV_SQRT_2PI * inv_sigma
 
 
-@njit(cache=True, inline="always")
+@njit
+def _near(e, z_lo, z_hi, hidden, inv_sigma, tail):
+    """Whether `_end_term` is computed rather than taken as 0 (within `tail` sigma)."""
+    lo = (z_lo - e) * inv_sigma
+    if hidden:
+        return not ((z_hi - e) * inv_sigma < -tail or lo > tail)
+    return not lo * lo > tail * tail
+
+
+@njit
 def _both_orders(lo, hi, zl0, zl1, lh, zr0, zr1, rh, inv, tail):
-    """p(z | ends lo, hi) summed over the two orders of the two ends; the second factor of a
-    product is skipped where the first is 0 (most particles are far from most measurements)."""
+    """p(z | ends lo, hi) summed over the two orders of the two ends; a product is computed
+    only where both its ends are near (most particles are far from most measurements, and
+    the reversed order is far for all but the shortest shapes)."""
     total = 0.0
-    f = _end_term(lo, zl0, zl1, lh, inv, tail)
-    if f != 0.0:
-        total += f * _end_term(hi, zr0, zr1, rh, inv, tail)
-    f = _end_term(hi, zl0, zl1, lh, inv, tail)
-    if f != 0.0:
-        total += f * _end_term(lo, zr0, zr1, rh, inv, tail)
+    if _near(lo, zl0, zl1, lh, inv, tail) and _near(hi, zr0, zr1, rh, inv, tail):
+        total += _end_term(lo, zl0, zl1, lh, inv, tail) * _end_term(hi, zr0, zr1, rh, inv, tail)
+    if _near(hi, zl0, zl1, lh, inv, tail) and _near(lo, zr0, zr1, rh, inv, tail):
+        total += _end_term(hi, zl0, zl1, lh, inv, tail) * _end_term(lo, zr0, zr1, rh, inv, tail)
     return total
 
 
-@njit(cache=True)
+@njit
 def _likelihood(left, right, z_left, z_right, left_hidden, right_hidden, sigma, tail):
     """`_both_orders` of every (particle row, particle)."""
     rows, n = left.shape
@@ -224,7 +207,7 @@ def _likelihood(left, right, z_left, z_right, left_hidden, right_hidden, sigma, 
     return out
 
 
-@njit(cache=True)
+@njit
 def _hit_weights(particles, weights, row, first, count, width, z_left, z_right, left_hidden,
                  right_hidden, sigma, tail):
     out = np.zeros((len(row), width))
@@ -241,15 +224,66 @@ def _hit_weights(particles, weights, row, first, count, width, z_left, z_right, 
     return out
 
 
-@njit(cache=True)
+@njit
+def _occluded_parts(scan_lane, ext_lo, ext_hi, distances):
+    """Lane k's hidden parts: the union of the angles [lo, hi] / d covered by the shapes of
+    lanes 0 .. k-1 (touching intervals merged), scaled back by d_k, concatenated over the lanes
+    (lo/hi[start[k]:start[k + 1]]). One sort of all shapes by angle, then one merging walk per
+    lane over the shapes of its nearer lanes."""
+    lanes = len(distances)
+    m = len(scan_lane)
+    a_lo = np.empty(m)
+    a_hi = np.empty(m)
+    for j in range(m):
+        d = distances[scan_lane[j]]
+        a_lo[j] = ext_lo[j] / d
+        a_hi[j] = ext_hi[j] / d
+    order = np.argsort(a_lo, kind="mergesort")
+    lo = np.empty(max(lanes * m, 1))
+    hi = np.empty(max(lanes * m, 1))
+    start = np.zeros(lanes + 1, np.int64)
+    c = 0
+    for k in range(lanes):
+        start[k] = c
+        d = distances[k]
+        have = False
+        run_lo = run_hi = 0.0
+        for t in range(m):
+            j = order[t]
+            if scan_lane[j] >= k:
+                continue
+            if have and a_lo[j] <= run_hi:
+                run_hi = max(run_hi, a_hi[j])
+                continue
+            if have:
+                lo[c] = run_lo * d
+                hi[c] = run_hi * d
+                c += 1
+            have = True
+            run_lo = a_lo[j]
+            run_hi = a_hi[j]
+        if have:
+            lo[c] = run_lo * d
+            hi[c] = run_hi * d
+            c += 1
+    start[lanes] = c
+    return lo[:c], hi[:c], start
+
+
+@njit
 def _hidden_probability(lane, left, right, lo, hi, start, sigma, reach):
-    """Parts of lane k are lo/hi[start[k]:start[k + 1]], sorted and disjoint (a few)."""
+    """Parts of lane k are lo/hi[start[k]:start[k + 1]], sorted and disjoint (a few). A
+    particle equal to the one before it (resampling makes copies, and sorting puts them side
+    by side) takes its q without the normal CDFs."""
     q = np.zeros(len(lane))
     inv = 1.0 / sigma
     for i in range(len(lane)):
         k = lane[i]
         first = start[k]
         li, ri = left[i], right[i]
+        if i > 0 and li == left[i - 1] and ri == right[i - 1] and k == lane[i - 1]:
+            q[i] = q[i - 1]
+            continue
         total = 0.0
         # from the last part, skip those starting beyond reach of the left end, then add
         # while a part can hold the right end (ends grow with the index: parts are disjoint)
@@ -263,3 +297,45 @@ def _hidden_probability(lane, left, right, lo, hi, start, sigma, reach):
                       * (_ndtr((b - ri) * inv) - _ndtr((a - ri) * inv)))
         q[i] = min(max(total, 0.0), 1.0)
     return q
+
+
+@njit
+def _overlap(a0, a1, b0, b1):
+    """Length of [a0, a1] intersected with [b0, b1] (0 if they do not meet)."""
+    return max(min(a1, b1) - max(a0, b0), 0.0)
+
+
+@njit
+def _clutter_density(left, right, left_hidden, right_hidden, half, lmin, lmax, c):
+    """c times: for two seen ends, 1 if the left end is on the section and the length within
+    [lmin, lmax]; for one hidden end, the length of its interval that such a shape allows;
+    for two, the area of {(s, e) in the two intervals: lmin <= e - s <= lmax}, exact by the
+    trapezoid rule on the breakpoints of the piecewise-linear overlap."""
+    m = len(left)
+    out = np.empty(m)
+    knots = np.empty(6)
+    for j in range(m):
+        l0, l1, r0, r1 = left[j, 0], left[j, 1], right[j, 0], right[j, 1]
+        seen = 1.0 if -half <= l0 <= half else 0.0
+        if not left_hidden[j] and not right_hidden[j]:
+            gap = r0 - l0
+            v = seen if lmin <= gap <= lmax else 0.0
+        elif not right_hidden[j]:
+            v = _overlap(max(l0, -half), min(l1, half), r0 - lmax, r0 - lmin)
+        elif not left_hidden[j]:
+            v = seen * _overlap(r0, r1, l0 + lmin, l0 + lmax)
+        else:
+            s0, s1 = max(l0, -half), min(l1, half)
+            top = max(s0, s1)
+            knots[0], knots[1], knots[2] = s0, s1, r0 - lmax
+            knots[3], knots[4], knots[5] = r0 - lmin, r1 - lmax, r1 - lmin
+            for t in range(6):
+                knots[t] = min(max(knots[t], s0), top)
+            knots.sort()
+            v = 0.0
+            for t in range(5):
+                w0 = _overlap(r0, r1, knots[t] + lmin, knots[t] + lmax)
+                w1 = _overlap(r0, r1, knots[t + 1] + lmin, knots[t + 1] + lmax)
+                v += 0.5 * (w1 + w0) * (knots[t + 1] - knots[t])
+        out[j] = c * v
+    return out

@@ -11,10 +11,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from occtrack.jit import njit
 
 
-@njit(cache=True)
+@njit
 def track_extents(owner, lane, weights, a_left, a_right, n):
     """Lane and expected extent (angles) of each of the n tracks."""
     total = np.zeros(n)
@@ -38,7 +39,7 @@ def track_extents(owner, lane, weights, a_left, a_right, n):
     return track_lane, sum_l, sum_r
 
 
-@njit(cache=True)
+@njit
 def expval_visibility(owner, lane, a_left, a_right, existence, occ_lane, occ_l, occ_r, beta,
                       min_visible):
     """v = max(prod_i (1 - r_i (1 - e^(-beta cover_l)) (1 - e^(-beta cover_r))), v_min) over
@@ -74,7 +75,7 @@ def expval_visibility(owner, lane, a_left, a_right, existence, occ_lane, occ_l, 
     return visible
 
 
-@njit(cache=True)
+@njit
 def grid_visibility(owner, lane, weights, a_left, a_right, existence, n, n_lanes, c0, step,
                     top, cells):
     """The visibility grid: a cell seen from lane k is open with probability prod_i (1 - r_i

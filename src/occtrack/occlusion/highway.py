@@ -36,7 +36,9 @@ from occtrack.occlusion.base import OcclusionContext, OcclusionTerms
 @dataclass(frozen=True)
 class HighwayContext(OcclusionContext):
     """OcclusionContext plus the lane (0 = nearest) of every particle. `means` are particles
-    (left end, length, signed velocity); `measurement_model` is a highway MeasurementModel."""
+    (left end, length, signed velocity); `measurement_model` is a highway MeasurementModel.
+    The tracker passes views of its own arrays (no copy a step): they hold during `terms`
+    only, and a handler must not write to them."""
 
     lane: np.ndarray | None = None
 
