@@ -715,6 +715,7 @@ def test_births_join_the_poisson_part_at_the_edges_and_everywhere():
     assert f.n == 5 and (f.label[:5] == -1).all()
     assert f.mass[:5] == pytest.approx([6 * dt] * 4 + [3 * dt + 50.0], rel=1e-15)
     assert (f.det[:5] == 0.85).all() and (f.occ[:5] == 0.4).all()
+    assert (f.coast[:5] == 0.0).all()  # not coasting: predicted with the configured motion
     half = [20.0, 60.0]
     expected = np.array([[[0, 45, 20], [H / 2, 0, 60]], [[W, -45, 20], [H / 2, 0, 60]],
                          [[W / 2, 0, 20], [0, 45, 60]], [[W / 2, 0, 20], [H, -45, 60]],
@@ -767,3 +768,212 @@ def test_a_new_filter_is_empty_and_counts_its_steps():
     for _ in range(2):
         f.step(z, np.ones(1))
     assert f.steps == 2 and f.iterations >= 1
+
+
+# -- the step's wiring: time step, classes, coasting, gating, loopy BP's settings -------------
+
+
+def test_step_takes_its_dt_and_a_filter_stepped_with_dt_equals_one_configured_with_it():
+    z = edges(person(905.0))
+    stepped, configured = make(capacity=0), make(capacity=0, fps=4.0)
+    for _ in range(3):
+        stepped.step(z, np.ones(1), dt=0.25)
+        configured.step(z, np.ones(1))
+    assert stepped.dt == 0.25 and stepped.n == configured.n
+    for name in ("mass", "mean", "cov", "det", "occ", "coast", "label"):
+        assert np.array_equal(getattr(stepped, name)[:stepped.n],
+                              getattr(configured, name)[:configured.n])
+
+
+@pytest.mark.parametrize("detection_class,taken", [(1, True), (0, False)])
+def test_an_object_takes_only_a_detection_of_its_own_class(detection_class, taken):
+    """An object of class 1 next to a detection: of class 1 it is hit (a hit child with d = 1
+    and most of the mass); of class 0 the pair is impossible, so the object fares exactly as
+    in a frame without detections."""
+    def stepped(z, classes):
+        f = make(clutter_rate=clutter_rate(1e-7))
+        load(f, [0.8], [0], det=0.9)
+        f.slot_class[0] = 1
+        f.step(z, np.ones(len(z)), classes=classes)
+        return f
+
+    f = stepped(edges(person(905.0, 396.0)), np.array([detection_class]))
+    mine = f.label[:f.n] == 0
+    assert (f.det[:f.n][mine] == 1.0).any() == taken
+    alone = stepped(np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64))
+    if taken:
+        assert f.existence()[0] > 0.9 > alone.existence()[0]
+    else:
+        assert f.existence()[0] == alone.existence()[0]
+        assert f.slot_class[1] == 0  # the detection started a Bernoulli of its own class
+
+
+def test_components_coast_once_more_than_half_their_mass_was_missed():
+    """The coasting model (velocity relaxing with coast_velocity_time) predicts a component
+    whose coasting time exceeds half a step; the others keep the configured motion (constant
+    velocity): a merged component's coasting time is its children's mass-weighted mean."""
+    f = make()
+    dt = f.config.dt
+    coast = np.array([0.0, 0.5 * dt, 0.6 * dt, dt, 3 * dt])
+    states = np.stack([person(900.0 + 40 * k, vx=30.0, vy=-12.0) for k in range(5)])
+    load(f, np.full(5, 0.5), np.full(5, -1), states)
+    f.coast[:5] = coast
+    f._predict()
+    for k in range(5):
+        F = f.coast_motion.F if coast[k] > 0.5 * dt else f.motion.F
+        assert np.allclose(f.mean[k], states[k] @ F.T, rtol=1e-14, atol=0)
+    assert f.mean[0, 0, 1] == 30.0 and f.mean[2, 0, 1] < 30.0 * 0.8
+
+
+def test_objects_not_confirmed_and_the_poisson_part_are_not_occludable():
+    """Occlusion explains the misses of confirmed objects only: a Bernoulli short of
+    confirm_hits and the Poisson part miss with 1 - d whatever v and q, and their o is carried
+    unchanged; a missed detectable source that cannot be occluded was undetectable (d' = 0)."""
+    f = make(FixedTerms(0.6, 0.3))
+    load(f, [0.8, 0.5], [0, -1], det=0.9, occ=0.5)
+    f.slot_hits[0], f.slot_age[0] = 1, 1
+    f._update(*EMPTY)
+    g = groups(f)
+    assert f.existence()[0] == pytest.approx(0.08 / 0.28, rel=1e-12)
+    assert f.mass[g[-1]].tolist() == [pytest.approx(0.05, rel=1e-12)]
+    assert f.det[:2].tolist() == [0.0, 0.0] and f.occ[:2].tolist() == [0.5, 0.5]
+    assert f.slot_hidden[0] == 0.0
+
+
+def test_slot_hidden_is_the_probability_that_the_miss_was_occlusions_doing():
+    """P(occluded | miss) = d o (1 - v + v q) / miss, miss = 1 - d (1 - o + o v) + d o v q,
+    mass-weighted over an object's components; 0 for every other slot, whatever it held."""
+    d, o, v, q = 0.7, 0.6, 0.6, 0.3
+    f = make(FixedTerms(v, q))
+    load(f, [0.5, 0.3, 0.4], [0, 0, 2], det=d, occ=o)
+    f.det[1], f.occ[1] = 0.4, 0.9
+    f.slot_hidden[:] = 0.7
+    f._update(*EMPTY)
+
+    def hidden_and_miss(d, o):
+        return d * o * (1 - v + v * q), 1 - d * (1 - o + o * v) + d * o * v * q
+
+    (h0, m0), (h1, m1) = hidden_and_miss(d, o), hidden_and_miss(0.4, 0.9)
+    expected = [(0.5 * h0 + 0.3 * h1) / (0.5 * m0 + 0.3 * m1), 0.0, h0 / m0, 0.0]
+    assert f.slot_hidden.tolist() == pytest.approx(expected, rel=1e-12)
+    assert f.slot_hidden[1] == 0.0 and f.slot_hidden[3] == 0.0
+
+
+def test_a_new_bernoullis_existence_weighs_the_poisson_part_against_clutter_per_area():
+    """One Poisson component at one detection, no objects: the new Bernoulli's existence is
+    L_0 / (L_0 + kappa p_F), L_0 = w d p(z | x), with p_F uniform over the image and over box
+    areas, clutter_rate / (W H max(area, 1 px^2)): a box smaller than a pixel counts as one
+    pixel. clutter_rate is chosen so that the existence is exactly 1/2."""
+    for half in ((0.25, 0.5), (0.5, 0.5), (20.0, 60.0)):
+        state = person(900.0, 400.0, half=half)
+        z = edges(state)
+        area = max(4 * half[0] * half[1], 1.0)
+        probe = make()
+        load(probe, [0.5], [-1], np.stack([state]), det=0.9)
+        lik = np.exp(probe.measurement.loglik(probe.mean[:1], probe.cov[:1], z,
+                                              probe.measurement.observed(z)))[0, 0]
+        L0 = 0.5 * 0.9 * lik
+        f = make(clutter_rate=L0 * 1920.0 * 1080.0 * area)
+        load(f, [0.5], [-1], np.stack([state]), det=0.9)
+        f._update(z, f.measurement.observed(z), np.ones(1))
+        assert f.slot_used.tolist() == [True, False, False, False]
+        assert f.existence()[0] == pytest.approx(0.5, rel=1e-12)
+
+
+def association_edge(gating: bool, ratio: float) -> float:
+    """One confirmed object (r 0.8, d 0.9) and one detection 60 px off, with clutter such
+    that L = ratio miss kappa. Returns the object's existence after the update."""
+    probe = make()
+    load(probe, [0.8], [0], det=0.9)
+    z = edges(person(960.0, 400.0))
+    lik = np.exp(probe.measurement.loglik(probe.mean[:1], probe.cov[:1], z,
+                                          probe.measurement.observed(z)))[0, 0]
+    big_l, miss_obj = 0.8 * 0.9 * lik, 1 - 0.8 * 0.9
+    assert np.exp(-300) < big_l < 1e-12
+    kappa = big_l / (ratio * miss_obj)
+    f = make(gating=gating, clutter_rate=kappa * 1920.0 * 1080.0 * 40.0 * 120.0)
+    load(f, [0.8], [0], det=0.9)
+    f._update(z, f.measurement.observed(z), np.ones(1))
+    return f.existence()[0]
+
+
+@pytest.mark.parametrize("gating,ratio,kept", [(True, 0.5e-9, False), (True, 2e-9, True),
+                                               (False, 0.5e-9, True), (False, 1e-12, True)])
+def test_association_edges_below_the_floor_are_left_out_only_under_gating(gating, ratio, kept):
+    """An edge with L_ij < EDGE_FLOOR miss_i w_new_j (1e-9) cannot reach p_hit = 1e-9: under
+    gating it is left out and the object is simply missed, r' = r (1 - d) / miss_obj; kept, the
+    exact one-edge association gives p_hit = ratio / (1 + ratio) and r' = that times
+    (1 - p_hit) (its hit child is below prune_mass)."""
+    got = association_edge(gating, ratio)
+    pure_miss = 0.8 * 0.1 / (1 - 0.8 * 0.9)
+    p_hit = ratio / (1 + ratio) if kept else 0.0
+    assert got == pytest.approx(pure_miss * (1 - p_hit), rel=1e-13, abs=0)
+    assert (abs(got / pure_miss - 1) > 1e-13) == kept
+
+
+def two_by_two(**settings) -> GaussianMixturePMB:
+    """Two confirmed objects and two detections between them: a loop in the association
+    graph, so loopy BP takes several iterations."""
+    f = make(clutter_rate=clutter_rate(1e-9), **settings)
+    load(f, [0.9, 0.9], [0, 1], np.stack([person(900.0), person(930.0)]), det=0.9)
+    z = np.concatenate([edges(person(910.0)), edges(person(920.0))])
+    f._update(z, f.measurement.observed(z), np.ones(2))
+    return f
+
+
+def test_loopy_bp_stops_at_the_configured_tolerance_and_iteration_limit():
+    default = two_by_two().iterations
+    assert default > 3
+    assert two_by_two(lbp_max_iterations=3).iterations == 3
+    assert two_by_two(lbp_tolerance=1e-2).iterations < default
+    assert two_by_two(lbp_tolerance=1e-12).iterations > default
+
+
+def test_gated_pairs_are_those_whose_boxes_overlap_their_objects_gate():
+    """Above DENSE_PAIRS pairs, a component and a detection pair up when the detection's box
+    overlaps the gate of the component's object (the union of its components' gates) or, for
+    the Poisson part, the component's own gate; an axis with both edges on the border has no
+    extent. Checked against every pair by brute force, with their log-likelihoods."""
+    rng = np.random.default_rng(7)
+    f = make(capacity=256)
+    labels = np.sort(np.concatenate([np.full(40, -1), rng.integers(0, 4, 40)]))
+    n, M = len(labels), 60
+    means = np.stack([person(*rng.uniform([0, 0], [1920, 1080]), half=rng.uniform(5, 60, 2))
+                      for _ in range(n)])
+    load(f, np.full(n, 0.1), labels, means)
+    f.cov[:n] *= rng.uniform(0.2, 5.0, n)[:, None, None, None]
+    centre, half = rng.uniform([0, 0], [1920, 1080], (M, 2)), rng.uniform(5, 80, (M, 2))
+    z = np.clip(np.stack([centre - half, centre + half], axis=-1), 0, [[1920], [1080]])
+    z[0, 0] = [0.0, 1920.0]  # a box as wide as the image: its horizontal axis unmeasured
+    observed = f.measurement.observed(z)
+    assert n * M > 4096 and not observed[0, 0].any()
+    slots = np.flatnonzero(f.slot_used)
+    A = len(slots)
+    row_of_slot = np.full(len(f.slot_used), A)
+    row_of_slot[slots] = np.arange(A)
+    rows = np.where(labels >= 0, row_of_slot[np.maximum(labels, 0)], A)
+    mean, cov = f.mean[:n], f.cov[:n]
+    pk, pj, loglik, (cand_row, cand_col, cand_of_pair) = f._pairs(mean, cov, z, observed,
+                                                                  rows, A)
+    zhat, S = f.measurement.innovation(mean, cov)
+    gate = f.measurement.gates(zhat, S, f.config.gate_sigmas)
+    unit = gate.copy()
+    for row in range(A):
+        mine = rows == row
+        unit[mine, :, 0] = gate[mine, :, 0].min(axis=0)
+        unit[mine, :, 1] = gate[mine, :, 1].max(axis=0)
+    box = z.copy()
+    box[~observed.any(axis=2)] = [-np.inf, np.inf]
+    overlap = ((unit[:, None, :, 0] < box[None, :, :, 1])
+               & (box[None, :, :, 0] < unit[:, None, :, 1])).all(axis=2)
+    expected = set(zip(*np.nonzero(overlap), strict=True))
+    assert set(zip(pk.tolist(), pj.tolist(), strict=True)) == expected and len(pk) == len(
+        expected)
+    assert 0 < len(expected) < n * M
+    full = f.measurement.loglik(mean, cov, z, observed)
+    np.testing.assert_allclose(loglik, full[pk, pj], rtol=1e-10)
+    assert np.array_equal(cand_row[cand_of_pair], rows[pk])
+    assert np.array_equal(cand_col[cand_of_pair], pj)
+    objects = cand_row < A  # one candidate per (object, detection); per component for Poisson
+    assert len(set(zip(cand_row[objects].tolist(), cand_col[objects].tolist(),
+                       strict=True))) == objects.sum()
