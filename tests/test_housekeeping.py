@@ -785,15 +785,15 @@ def test_step_takes_its_dt_and_a_filter_stepped_with_dt_equals_one_configured_wi
                               getattr(configured, name)[:configured.n])
 
 
-@pytest.mark.parametrize("detection_class,taken", [(1, True), (0, False)])
+@pytest.mark.parametrize("detection_class,taken", [(2, True), (1, False)])
 def test_an_object_takes_only_a_detection_of_its_own_class(detection_class, taken):
-    """An object of class 1 next to a detection: of class 1 it is hit (a hit child with d = 1
-    and most of the mass); of class 0 the pair is impossible, so the object fares exactly as
-    in a frame without detections."""
+    """An object of class 2 next to a detection: of class 2 it is hit (a hit child with d = 1
+    and most of the mass); of class 1 the pair is impossible, so the object fares exactly as
+    in a frame without detections, and the detection starts a Bernoulli of class 1."""
     def stepped(z, classes):
         f = make(clutter_rate=clutter_rate(1e-7))
         load(f, [0.8], [0], det=0.9)
-        f.slot_class[0] = 1
+        f.slot_class[0] = 2
         f.step(z, np.ones(len(z)), classes=classes)
         return f
 
@@ -805,7 +805,7 @@ def test_an_object_takes_only_a_detection_of_its_own_class(detection_class, take
         assert f.existence()[0] > 0.9 > alone.existence()[0]
     else:
         assert f.existence()[0] == alone.existence()[0]
-        assert f.slot_class[1] == 0  # the detection started a Bernoulli of its own class
+        assert f.slot_used[1] and f.slot_class[1] == 1
 
 
 def test_components_coast_once_more_than_half_their_mass_was_missed():
@@ -977,3 +977,70 @@ def test_gated_pairs_are_those_whose_boxes_overlap_their_objects_gate():
     objects = cand_row < A  # one candidate per (object, detection); per component for Poisson
     assert len(set(zip(cand_row[objects].tolist(), cand_col[objects].tolist(),
                        strict=True))) == objects.sum()
+
+
+def test_at_most_dense_pairs_every_pair_is_listed_and_above_only_gated_ones():
+    f = make(capacity=0)
+    for n, dense in ((64, True), (65, False)):
+        f._reserve(n)
+        load(f, np.full(n, 0.1), np.full(n, -1))
+        z = np.concatenate([edges(person(100.0 + 25 * j, 300.0)) for j in range(64)])
+        observed = f.measurement.observed(z)
+        pk, pj, _, cand = f._pairs(f.mean[:n], f.cov[:n], z, observed, np.zeros(n, int), 0)
+        assert (cand is None) == dense and (len(pk) == n * 64) == dense
+
+
+def test_each_poisson_component_is_gated_on_its_own():
+    """Above DENSE_PAIRS pairs, a detection's Poisson term L_0 sums only the components whose
+    own gate (3 edge standard deviations here) it overlaps: the new Bernoulli's existence is
+    the sum of its hit children l_k / (L_0 + kappa) above prune_mass, with that L_0, worked out
+    here from the per-pair likelihoods."""
+    rng = np.random.default_rng(11)
+    n = 4200
+    f = make(capacity=0, gate_sigmas=3.0, clutter_rate=clutter_rate(1e-9))
+    f._reserve(n)
+    means = np.stack([person(*rng.uniform([705, 196], [1105, 596])) for _ in range(n)])
+    load(f, np.full(n, 0.01), np.full(n, -1), means, det=0.9, cov_diag=(900.0, 100.0, 400.0))
+    z = edges(person(905.0, 396.0))
+    observed = f.measurement.observed(z)
+    zhat, S = f.measurement.innovation(f.mean[:n], f.cov[:n])
+    gate = f.measurement.gates(zhat, S, 3.0)
+    inside = ((gate[:, :, 0] < z[0, :, 1]) & (z[0, :, 0] < gate[:, :, 1])).all(axis=1)
+    lik = np.exp(f.measurement.loglik(f.mean[:n], f.cov[:n], z, observed)[:, 0])
+    L0 = (0.01 * 0.9 * lik[inside]).sum()
+    assert 0 < inside.sum() < n and (0.01 * 0.9 * lik[~inside]).sum() > 1e-9 * L0
+    f._update(z, observed, np.ones(1))
+    child = 0.01 * 0.9 * lik[inside] / (L0 + 1e-9)  # the hit children, pruned below 1e-5
+    assert f.existence()[0] == pytest.approx(child[child > 1e-5].sum(), rel=1e-12)
+    assert child[child > 1e-5].sum() > 0.9
+
+
+def test_children_are_pooled_per_parent_miss_child_first_then_hits_by_detection():
+    """Without merging, an object's children follow its components' order: per parent the
+    miss child (the parent's state), then its hit children in the order of the detections
+    (each pulled towards its detection)."""
+    f = make(clutter_rate=clutter_rate(1e-7))
+    load(f, [0.4, 0.4], [0, 0], np.stack([person(900.0), person(1000.0)]), det=0.9)
+    z = np.concatenate([edges(person(x)) for x in (1003.0, 903.0, 998.0, 897.0)])
+    f._update(z, f.measurement.observed(z), np.ones(4))
+    assert f.n == 6 and (f.label[:6] == 0).all()
+    shift = f.mean[:6, 0, 0] - np.repeat([900.0, 1000.0], 3)
+    assert np.sign(shift).tolist() == [0, 1, -1, 0, 1, -1]
+    assert (f.det[[0, 3]] < 1).all() and (f.det[[1, 2, 4, 5]] == 1).all()
+
+
+def test_an_update_that_outgrows_the_pool_keeps_every_child():
+    """A growing pool (capacity 0) that receives more children than it holds doubles and
+    ends with exactly what a pool large enough from the start holds."""
+    results = []
+    for capacity in (0, 4096):
+        f = make(capacity=capacity, clutter_rate=clutter_rate(1e-12))
+        n = 250
+        means = np.stack([person(880.0 + 0.2 * k, 400.0) for k in range(n)])
+        load(f, np.full(n, 0.005), np.full(n, -1), means, det=0.9)
+        z = np.concatenate([edges(person(x)) for x in (890.0, 905.0, 915.0)])
+        f._update(z, f.measurement.observed(z), np.ones(3))
+        results.append((f.n, [getattr(f, a)[:f.n].copy() for a in f._POOL]))
+    assert results[0][0] == results[1][0] > INITIAL_POOL
+    for a, b in zip(results[0][1], results[1][1], strict=True):
+        assert np.array_equal(a, b)
