@@ -16,7 +16,14 @@ import pytest
 # the tracker package first: importing gmpmb alone runs into the circular import
 # gmpmb -> tracker.config -> tracker/__init__ -> tracker.tracker -> gmpmb
 import occtrack.tracker  # noqa: F401
-from occtrack.filters.gmpmb import INITIAL_POOL, INITIAL_SLOTS, N_BIRTH, GaussianMixturePMB
+from occtrack.filters.gmpmb import (
+    INITIAL_POOL,
+    INITIAL_SLOTS,
+    N_BIRTH,
+    GaussianMixturePMB,
+    _cell_keys,
+    _packed_order,
+)
 from occtrack.models.box import edges_from_ltwh
 from occtrack.occlusion.base import NoOcclusion, OcclusionTerms
 from occtrack.tracker import TrackerConfig
@@ -1044,3 +1051,88 @@ def test_an_update_that_outgrows_the_pool_keeps_every_child():
     assert results[0][0] == results[1][0] > INITIAL_POOL
     for a, b in zip(results[0][1], results[1][1], strict=True):
         assert np.array_equal(a, b)
+
+
+def test_per_slot_bookkeeping_of_hits_misses_and_coasting_time():
+    """After an update a used slot holds the detection it took (p_hit > 1/2) or -1, one more
+    tracked frame, one more hit if it took one, and its coasting time: 0 after a hit, one dt
+    more after a miss. A detection it only may have taken (p_hit <= 1/2) is not counted;
+    unused slots keep their counts and coasting time (their detection is -1)."""
+    f = make(clutter_rate=clutter_rate(1e-7))
+    load(f, [0.8, 0.8, 0.8], [0, 1, 3], np.stack([person(900.0), person(1300.0),
+                                                  person(500.0)]), det=0.9)
+    f.slot_coast[:] = [0.2, 0.3, 0.4, 0.5]
+    f.slot_detection[:] = [5, 5, 5, 5]
+    f.slot_age[2], f.slot_hits[2] = 7, 7
+    z = np.concatenate([edges(person(1302.0)), edges(person(560.0))])  # 60 px off slot 3
+    f._update(z, f.measurement.observed(z), np.ones(2))
+    hits, age = f.config.confirm_hits, f.config.confirm_window
+    assert f.slot_detection.tolist() == [-1, 0, -1, -1]
+    assert f.slot_hits.tolist() == [hits, hits + 1, 7, hits]
+    assert f.slot_age.tolist() == [age + 1, age + 1, 7, age + 1]
+    assert f.slot_coast.tolist() == pytest.approx([0.2 + f.dt, 0.0, 0.4, 0.5 + f.dt], rel=1e-15)
+    assert 0 < f.existence()[3] and np.isin(f.label[:f.n], [0, 1, 3]).any()
+
+
+def test_a_doomed_bernoulli_in_slot_zero_goes_with_all_its_components():
+    f = make()
+    load(f, [0.5, 0.3, 0.5], [0, 0, 1], det=0.5)
+    f.slot_age[0], f.slot_hits[0] = 4, 1  # 1 hit of 4 frames: 3 of 5 is out of reach
+    f._update(*EMPTY)
+    assert f.slot_used.tolist() == [False, True, False, False]
+    assert set(f.label[:f.n].tolist()) == {1}
+
+
+def test_ties_in_existence_keep_the_older_bernoulli_then_the_earlier_measurement():
+    """Under a hard max_labels, equal existences rank in a fixed order: existing Bernoullis
+    by slot, then new ones by measurement."""
+    rng = np.random.default_rng(12)
+    L, M = 24, 16
+    f = make(max_labels=L)
+    f.slot_used[:] = True
+    r_old, r_new = rng.choice([0.5, 0.3, 0.2], L), rng.choice([0.5, 0.3, 0.2], M)
+    mass = np.concatenate([r_old, r_new])
+    label = np.concatenate([np.arange(L), np.full(M, -1)])
+    newborn = np.concatenate([np.full(L, -1), np.arange(M)])
+    with pytest.warns(RuntimeWarning, match="max_labels = 24"):
+        out = f._assign_labels(mass, label, newborn, M)
+    r_all = np.concatenate([r_old, r_new])
+    ranked = sorted(range(L + M), key=lambda i: (-r_all[i], i))[:L]
+    kept = np.zeros(L + M, dtype=bool)
+    kept[ranked] = True
+    assert ((out >= 0) == kept).all() and 0 < kept[L:].sum() < M and f.slot_used.all()
+
+
+def test_the_labels_warning_names_the_step_and_counts_exactly():
+    """The report of recycled labels: the step it happened at (steps taken + 1), how many
+    Bernoullis were eligible, how many went with the largest existence lost, and how many of
+    them were above report_existence (strictly: one at exactly 0.5 is not)."""
+    f = make(max_labels=2)
+    f.steps = 6
+    f.slot_used[:] = True
+    mass = np.array([0.9, 0.5, 0.8, 0.6])
+    with pytest.warns(RuntimeWarning) as record:
+        f._assign_labels(mass, np.array([0, 1, -1, -1]), np.array([-1, -1, 0, 1]), 2)
+    assert str(record[0].message).startswith(
+        "max_labels = 2 reached at step 7: 4 Bernoullis held existence >= 0.001, the 2 "
+        "weakest (existence up to 0.6; 1 of them above report_existence) were recycled")
+
+
+def test_duplicates_merge_when_the_cell_keys_do_not_pack():
+    """Cells far too small to merge anything but identical states, over a spread too wide for
+    one 62-bit key: the lexsort path still brings equal keys together (whatever comes before
+    them) and merges exactly those, and nothing else."""
+    f = make()
+    far = person(1800.0, 1000.0, vx=400.0, vy=-300.0)
+    states = [person(900.0), person(900.0, vx=5.0), person(900.0), far, person(900.0)]
+    mean = np.stack(states)
+    cov = np.tile(np.diag([25.0, 100.0, 4.0]), (5, 2, 1, 1))
+    mass, det = np.array([0.1, 0.2, 0.3, 0.4, 0.05]), np.array([0.9, 0.8, 0.7, 0.6, 0.5])
+    label = np.array([0, -1, 1, 0, 0])
+    assert not _packed_order(_cell_keys(mean, label, np.full(6, 1e-6)))[0]
+    out = f._merge(mass, mean, cov, det, det.copy(), np.zeros(5), label)
+    assert len(out[0]) == 4
+    merged = np.flatnonzero(np.isclose(out[0], 0.15))
+    assert len(merged) == 1 and out[6][merged[0]] == 0
+    assert out[3][merged[0]] == pytest.approx((0.1 * 0.9 + 0.05 * 0.5) / 0.15, rel=1e-12)
+    assert sorted(out[0].tolist()) == pytest.approx([0.15, 0.2, 0.3, 0.4], rel=1e-15)
