@@ -25,6 +25,7 @@ from occtrack.filters.gmpmb import (
     _packed_order,
 )
 from occtrack.models.box import edges_from_ltwh
+from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import NoOcclusion, OcclusionTerms
 from occtrack.tracker import TrackerConfig
 
@@ -813,6 +814,7 @@ def test_an_object_takes_only_a_detection_of_its_own_class(detection_class, take
     else:
         assert f.existence()[0] == alone.existence()[0]
         assert f.slot_used[1] and f.slot_class[1] == 1
+    assert f.slot_class.dtype == np.int64  # class ids stay integers
 
 
 def test_components_coast_once_more_than_half_their_mass_was_missed():
@@ -1136,3 +1138,38 @@ def test_duplicates_merge_when_the_cell_keys_do_not_pack():
     assert len(merged) == 1 and out[6][merged[0]] == 0
     assert out[3][merged[0]] == pytest.approx((0.1 * 0.9 + 0.05 * 0.5) / 0.15, rel=1e-12)
     assert sorted(out[0].tolist()) == pytest.approx([0.15, 0.2, 0.3, 0.4], rel=1e-15)
+
+
+@pytest.mark.parametrize("seed", [134, 156, 198])
+def test_select_keeps_exactly_the_heaviest_for_any_room(seed):
+    """Random pools and capacities, including ones where a partition one place off would
+    keep a wrong child."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(20, 3000))
+    room = int(rng.integers(3, n - 3))
+    flat = rng.random(n)
+    f = make(capacity=room + N_BIRTH)
+    with pytest.warns(RuntimeWarning, match=f"capacity = {room + N_BIRTH} "):
+        keep = f._select(flat)
+    assert np.array_equal(keep, np.sort(np.argsort(-flat)[:room]))
+
+
+def test_the_capacity_warning_names_the_step():
+    f = make()
+    f.steps = 11
+    with pytest.warns(RuntimeWarning, match=r"capacity = 16 Gaussian components reached at "
+                                            r"step 12: 20 were above prune_mass, the 9 "):
+        f._select(np.linspace(0.1, 0.3, 20))
+
+
+def test_motion_and_survival_for_a_step_of_dt():
+    """The motion models and the survival probability of a step of dt seconds, for the
+    configured dt and for one given to the step (rebuilt when dt returns)."""
+    f = make(position_noise=2.0, velocity_noise=7.0, size_noise=0.5, velocity_time=4.0,
+             coast_velocity_time=0.3, death_rate=0.2)
+    for dt in (f.config.dt, 0.25, f.config.dt, 0.25):
+        f._use_dt(dt)
+        assert f.dt == dt
+        assert f.motion == ConstantVelocity(dt, 2.0, 7.0, 0.5, 4.0)
+        assert f.coast_motion == ConstantVelocity(dt, 2.0, 7.0, 0.5, 0.3)
+        assert f.survival_inside == pytest.approx(np.exp(-0.2 * dt), rel=1e-15)
