@@ -50,7 +50,7 @@ GROUPS = {
                    "test_housekeeping.py"]),
     "models": ([*BOX_MODELS, "src/occtrack/models/beam.py"],
                ["test_gaussian.py", "test_box_occlusion.py", "test_housekeeping.py",
-                "test_tracker.py", "test_scaling.py", "test_lidar.py"]),
+                "test_tracker.py", "test_scaling.py", "test_lidar.py", "test_kernels.py"]),
     "densities": (["src/occtrack/densities/*"], ["test_gaussian.py"]),
     "io-mot": (["src/occtrack/io/mot.py"],
                ["test_io_mot.py", "test_eval.py", "test_cli_track.py"]),

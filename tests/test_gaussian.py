@@ -8,7 +8,8 @@ from scipy.special import log_ndtr
 from scipy.stats import multivariate_normal
 
 from occtrack.densities import gaussian
-from occtrack.models.box import BoxMeasurement, edges_from_ltwh, ltwh_from_edges
+from occtrack.models.birth import EdgeBirths
+from occtrack.models.box import BoxMeasurement, edges_from_ltwh, ltwh_from_edges, ltwh_from_states
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 
@@ -151,3 +152,56 @@ def test_markov_feature_forgets_its_ratio_every_half_second():
     assert p == pytest.approx(0.8 - 0.1 * 0.8)
     with pytest.raises(ValueError, match="outside"):
         TwoStateMarkov(1.5, 0.5)
+
+
+def test_box_conversions_keep_their_shapes_and_give_floats():
+    """ltwh <-> edges for one box (2, 2), a grid of them (K, M, 2, 2), and states to boxes:
+    left = c - s, width = 2 s per axis. Integer boxes give float edges."""
+    edges = edges_from_ltwh([[10, 20, 30, 40]])
+    assert edges.dtype == float and edges.tolist() == [[[10.0, 40.0], [20.0, 60.0]]]
+    assert ltwh_from_edges(edges[0]).tolist() == [10.0, 20.0, 30.0, 40.0]
+    grid = np.tile(edges[0], (3, 2, 1, 1))
+    assert ltwh_from_edges(grid).shape == (3, 2, 4)
+    states = np.array([[[100.0, 5.0, 20.0], [300.0, -2.0, 60.0]]])
+    assert ltwh_from_states(states).tolist() == [[80.0, 240.0, 40.0, 120.0]]
+
+
+def test_gates_widen_the_predicted_box_by_the_less_certain_edge():
+    """Per axis: [min(low, high) - k sd, max(low, high) + k sd] with sd the larger of the two
+    edges' standard deviations (the cross term plays no part)."""
+    zhat = np.array([[[100.0, 140.0], [50.0, 170.0]]])
+    S = np.array([[[[25.0, 20.0], [20.0, 9.0]], [[4.0, -3.0], [-3.0, 16.0]]]])
+    gates = BoxMeasurement.gates(zhat, S, 3.0)
+    np.testing.assert_array_equal(gates, [[[85.0, 155.0], [38.0, 182.0]]])
+
+
+def test_edge_births_default_speed_unit_is_one_pixel():
+    births = EdgeBirths((640.0, 480.0), inward_speed=12.0, speed_std=3.0)
+    _, means, covs = births.components(1.0, 2.0, np.array([10.0, 30.0]), np.array([2.0, 5.0]))
+    assert means[0, 0, 1] == 12.0 and means[1, 0, 1] == -12.0
+    assert covs[4, 0, 1, 1] == 9.0
+
+
+@pytest.mark.parametrize("stationary,ratio,message", [
+    (-0.1, 0.5, r"^stationary probability -0.1 is outside \[0, 1\]$"),
+    (1.5, 0.5, r"^stationary probability 1.5 is outside \[0, 1\]$"),
+    (0.5, -0.2, r"^half-second ratio -0.2 is outside \[0, 1\]$"),
+    (0.5, 1.2, r"^half-second ratio 1.2 is outside \[0, 1\]$"),
+])
+def test_markov_feature_refuses_probabilities_outside_zero_one(stationary, ratio, message):
+    with pytest.raises(ValueError, match=message):
+        TwoStateMarkov(stationary, ratio)
+
+
+def test_markov_feature_accepts_the_ends_of_zero_one():
+    """Ratio 0: the feature never forgets; 1: it is back at the stationary value at once."""
+    for p in (0.0, 1.0):
+        assert TwoStateMarkov(p, 0.5).predict(0.5, 0.5) == pytest.approx(0.5 * p + 0.25)
+    assert TwoStateMarkov(0.8, 0.0).predict(0.3, 2.0) == pytest.approx(0.3, rel=1e-15)
+    assert TwoStateMarkov(0.8, 1.0).predict(0.3, 0.5) == 0.8
+
+
+def test_motion_refuses_a_velocity_time_that_is_not_positive():
+    for tau in (0.0, -1.0):
+        with pytest.raises(ValueError, match=f"^velocity_time must be positive, not {tau}$"):
+            ConstantVelocity(0.1, 1.0, 1.0, 1.0, velocity_time=tau)
