@@ -205,3 +205,46 @@ def test_motion_refuses_a_velocity_time_that_is_not_positive():
     for tau in (0.0, -1.0):
         with pytest.raises(ValueError, match=f"^velocity_time must be positive, not {tau}$"):
             ConstantVelocity(0.1, 1.0, 1.0, 1.0, velocity_time=tau)
+
+
+def test_predict_with_one_model_per_block_equals_the_plain_form():
+    """F and Q given per block (B, d, d): block b of every component moves with F_b, Q_b."""
+    rng = np.random.default_rng(5)
+    means, covs = random_components(rng, 4)
+    F = np.stack([np.eye(3) + rng.normal(0, 0.1, (3, 3)) for _ in range(2)])
+    Q = np.stack([np.diag(rng.uniform(1, 3, 3)) for _ in range(2)])
+    m2, P2 = gaussian.predict(means, covs, F, Q)
+    for k in range(4):
+        for b in range(2):
+            np.testing.assert_allclose(m2[k, b], F[b] @ means[k, b], rtol=1e-13)
+            np.testing.assert_allclose(P2[k, b], F[b] @ covs[k, b] @ F[b].T + Q[b], rtol=1e-12)
+
+
+@pytest.mark.parametrize("p", [1, 2, 3])
+def test_inv_logdet_equals_linalg_for_every_size(p):
+    """Stacks (K, B, p, p) with B != p: the closed forms (p = 1, 2) and the general one."""
+    rng = np.random.default_rng(p)
+    a = rng.normal(size=(4, 5, p, p))
+    S = a @ np.swapaxes(a, -1, -2) + np.eye(p)
+    inv, logdet = gaussian.inv_logdet(S)
+    np.testing.assert_allclose(inv, np.linalg.inv(S), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(logdet, np.linalg.slogdet(S)[1], rtol=1e-12)
+
+
+def test_loglik_of_three_blocks_without_a_mask_sums_the_blocks():
+    """B = 3 blocks of p = 2 rows, `observed` left out (all measured): the sum over blocks of
+    log N(z_b; H m_b, H P_b H' + R)."""
+    rng = np.random.default_rng(6)
+    means = rng.normal(0, 50, (3, 3, 3)) + 200
+    a = rng.normal(size=(3, 3, 3, 3))
+    covs = a @ np.swapaxes(a, -1, -2) * 10 + np.eye(3)
+    z = rng.normal(200, 50, (4, 3, 2))
+    R = np.eye(2) * 25.0
+    got = gaussian.loglik(means, covs, H, R, z)
+    np.testing.assert_allclose(got, gaussian.loglik(means, covs, H, R, z,
+                                                    np.ones(z.shape, dtype=bool)), rtol=1e-13)
+    for k in range(3):
+        for j in range(4):
+            expected = sum(multivariate_normal(H @ means[k, b], H @ covs[k, b] @ H.T + R)
+                           .logpdf(z[j, b]) for b in range(3))
+            assert got[k, j] == pytest.approx(expected, rel=1e-10)
