@@ -10,6 +10,12 @@ notices survives. Its settings are [tool.mutmut] in pyproject.toml; this script 
 copy of src/, tests/ and pyproject.toml (so the checkout gets no mutants/ folder), with the
 modules and tests chosen here, by default each module group's own tests.
 
+Compiled loops are not mutated: mutmut leaves every decorated function alone (all but
+`staticmethod` / `classmethod`), so the `@njit` kernels (`occtrack.jit`) get no mutants and
+count in no score. What notices a fault in them is their comparison with plain numpy:
+tests/test_kernels.py for the filter's kernels, test_scaling.py for the box model's, and the
+hand-worked values of tests/test_housekeeping.py.
+
 Prints, per module: killed (a timeout counts: a fault that hangs the code is noticed),
 survived (no test failed, including functions no test calls), equivalent (survivors listed in
 benchmarks/mutation_equivalent.md: they change nothing observable, so no test can kill them),

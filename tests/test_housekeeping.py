@@ -1066,7 +1066,7 @@ def test_per_slot_bookkeeping_of_hits_misses_and_coasting_time():
     f.slot_coast[:] = [0.2, 0.3, 0.4, 0.5]
     f.slot_detection[:] = [5, 5, 5, 5]
     f.slot_age[2], f.slot_hits[2] = 7, 7
-    z = np.concatenate([edges(person(1302.0)), edges(person(560.0))])  # 60 px off slot 3
+    z = np.concatenate([edges(person(1302.0)), edges(person(525.0))])  # slot 3: p_hit 0.27
     f._update(z, f.measurement.observed(z), np.ones(2))
     hits, age = f.config.confirm_hits, f.config.confirm_window
     assert f.slot_detection.tolist() == [-1, 0, -1, -1]
@@ -1173,3 +1173,13 @@ def test_motion_and_survival_for_a_step_of_dt():
         assert f.motion == ConstantVelocity(dt, 2.0, 7.0, 0.5, 4.0)
         assert f.coast_motion == ConstantVelocity(dt, 2.0, 7.0, 0.5, 0.3)
         assert f.survival_inside == pytest.approx(np.exp(-0.2 * dt), rel=1e-15)
+
+
+def test_object_means_are_the_first_two_object_moments():
+    f = make()
+    load(f, [0.3, 0.1, 0.5], [0, 0, 2])
+    r, means = f.object_means()
+    r2, means2, _ = f.object_moments()
+    assert np.array_equal(r, r2) and np.array_equal(means, means2)
+    assert r.tolist() == pytest.approx([0.4, 0.0, 0.5, 0.0], rel=1e-15)
+    assert means[0, 0, 0] == pytest.approx((0.3 * 900.0 + 0.1 * 940.0) / 0.4, rel=1e-15)

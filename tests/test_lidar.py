@@ -123,3 +123,16 @@ def test_beam_model_accepts_the_ends_of_its_ranges():
         assert BeamModel(p_d=p_d).p_d == p_d
     small = BeamModel(sigma=1e-3, clutter_rate=1e-3, max_range=0.5)
     assert small.kappa == pytest.approx(2e-3, rel=1e-15)
+
+
+def test_bernoulli_update_takes_unnormalised_weights_and_returns_normalised_ones():
+    rng = np.random.default_rng(1)
+    particles = rng.normal(20.0, 0.3, 500)
+    weights = rng.uniform(0.5, 1.5, 500)
+    r, w = update_bernoulli(0.6, particles, weights, 20.2, MODEL)
+    r_unit, w_unit = update_bernoulli(0.6, particles, weights / weights.sum(), 20.2, MODEL)
+    assert r == pytest.approx(r_unit, rel=1e-12) and w.sum() == pytest.approx(1.0, rel=1e-12)
+    np.testing.assert_allclose(w, w_unit, rtol=1e-12)
+    lik = likelihood_ratio(20.2, particles, MODEL)
+    mean_lik = np.sum(weights * lik) / weights.sum()
+    assert r == pytest.approx(0.6 * mean_lik / (0.4 + 0.6 * mean_lik), rel=1e-12)
