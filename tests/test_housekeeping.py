@@ -884,9 +884,15 @@ def test_a_new_bernoullis_existence_weighs_the_poisson_part_against_clutter_per_
         L0 = 0.5 * 0.9 * lik
         f = make(clutter_rate=L0 * 1920.0 * 1080.0 * area)
         load(f, [0.5], [-1], np.stack([state]), det=0.9)
+        f.slot_coast[:], f.slot_class[:], f.slot_hidden[:] = 0.7, 5, 0.3  # a slot used before
         f._update(z, f.measurement.observed(z), np.ones(1))
         assert f.slot_used.tolist() == [True, False, False, False]
         assert f.existence()[0] == pytest.approx(0.5, rel=1e-12)
+        # the new Bernoulli's slot starts afresh: one frame, one hit (this detection), not
+        # coasting, class 0 (no classes given), a serial never used before
+        assert (f.slot_age[0], f.slot_hits[0], f.slot_detection[0]) == (1, 1, 0)
+        assert (f.slot_coast[0], f.slot_class[0], f.slot_hidden[0]) == (0.0, 0, 0.0)
+        assert f.slot_serial[0] == 0 and f._next_serial == 1
 
 
 def association_edge(gating: bool, ratio: float) -> float:
@@ -947,8 +953,8 @@ def test_gated_pairs_are_those_whose_boxes_overlap_their_objects_gate():
     f = make(capacity=256)
     labels = np.sort(np.concatenate([np.full(40, -1), rng.integers(0, 4, 40)]))
     n, M = len(labels), 60
-    means = np.stack([person(*rng.uniform([0, 0], [1920, 1080]), half=rng.uniform(5, 60, 2))
-                      for _ in range(n)])
+    means = np.stack([person(*rng.uniform([-300, -200], [2220, 1280]), half=rng.uniform(5, 60, 2))
+                      for _ in range(n)])  # some outside the image
     load(f, np.full(n, 0.1), labels, means)
     f.cov[:n] *= rng.uniform(0.2, 5.0, n)[:, None, None, None]
     centre, half = rng.uniform([0, 0], [1920, 1080], (M, 2)), rng.uniform(5, 80, (M, 2))
@@ -956,6 +962,7 @@ def test_gated_pairs_are_those_whose_boxes_overlap_their_objects_gate():
     z[0, 0] = [0.0, 1920.0]  # a box as wide as the image: its horizontal axis unmeasured
     observed = f.measurement.observed(z)
     assert n * M > 4096 and not observed[0, 0].any()
+    outside = (means[:, 0, 0] < -100) | (means[:, 0, 0] > 2020)
     slots = np.flatnonzero(f.slot_used)
     A = len(slots)
     row_of_slot = np.full(len(f.slot_used), A)
@@ -979,6 +986,7 @@ def test_gated_pairs_are_those_whose_boxes_overlap_their_objects_gate():
     assert set(zip(pk.tolist(), pj.tolist(), strict=True)) == expected and len(pk) == len(
         expected)
     assert 0 < len(expected) < n * M
+    assert any(outside[k] and j == 0 for k, j in expected)  # reached by the full-width box
     full = f.measurement.loglik(mean, cov, z, observed)
     np.testing.assert_allclose(loglik, full[pk, pj], rtol=1e-10)
     assert np.array_equal(cand_row[cand_of_pair], rows[pk])
