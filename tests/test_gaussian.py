@@ -123,6 +123,12 @@ def test_box_edges_round_trip_and_border_edges():
     model = BoxMeasurement((1920, 1080), edge_noise=0.075, border_margin=1.0)
     np.testing.assert_array_equal(model.observed(edges),
                                   [[[False, True], [True, True]], [[True, False], [True, False]]])
+    # an edge exactly at the margin is on the border; the defaults: 0.069 h, 1 px
+    at_margin = np.array([[[1.0, 1918.5], [1.5, 1078.5]], [[1.5, 1919.0], [1.0, 1079.0]]])
+    np.testing.assert_array_equal(BoxMeasurement((1920, 1080)).observed(at_margin),
+                                  [[[False, True], [True, True]], [[True, False], [False, False]]])
+    default = BoxMeasurement((1920, 1080))
+    assert (default.edge_noise, default.border_margin) == (0.069, 1.0)
 
 
 def test_border_edge_likelihood_is_probability_beyond_border_times_peak_density():
@@ -169,10 +175,12 @@ def test_box_conversions_keep_their_shapes_and_give_floats():
 def test_gates_widen_the_predicted_box_by_the_less_certain_edge():
     """Per axis: [min(low, high) - k sd, max(low, high) + k sd] with sd the larger of the two
     edges' standard deviations (the cross term plays no part)."""
-    zhat = np.array([[[100.0, 140.0], [50.0, 170.0]]])
-    S = np.array([[[[25.0, 20.0], [20.0, 9.0]], [[4.0, -3.0], [-3.0, 16.0]]]])
+    zhat = np.array([[[100.0, 140.0], [50.0, 170.0]], [[140.0, 100.0], [170.0, 50.0]]])
+    S = np.tile(np.array([[[25.0, 20.0], [20.0, 9.0]], [[4.0, -3.0], [-3.0, 16.0]]]),
+                (2, 1, 1, 1))
     gates = BoxMeasurement.gates(zhat, S, 3.0)
-    np.testing.assert_array_equal(gates, [[[85.0, 155.0], [38.0, 182.0]]])
+    # the second box is inside out (low edge above the high one): the same gate
+    np.testing.assert_array_equal(gates, [[[85.0, 155.0], [38.0, 182.0]]] * 2)
 
 
 def test_edge_births_default_speed_unit_is_one_pixel():
@@ -220,11 +228,11 @@ def test_predict_with_one_model_per_block_equals_the_plain_form():
             np.testing.assert_allclose(P2[k, b], F[b] @ covs[k, b] @ F[b].T + Q[b], rtol=1e-12)
 
 
-@pytest.mark.parametrize("p", [1, 2, 3])
-def test_inv_logdet_equals_linalg_for_every_size(p):
+@pytest.mark.parametrize("p,blocks", [(1, 2), (2, 1), (3, 2)])
+def test_inv_logdet_equals_linalg_for_every_size(p, blocks):
     """Stacks (K, B, p, p) with B != p: the closed forms (p = 1, 2) and the general one."""
     rng = np.random.default_rng(p)
-    a = rng.normal(size=(4, 5, p, p))
+    a = rng.normal(size=(4, blocks, p, p))
     S = a @ np.swapaxes(a, -1, -2) + np.eye(p)
     inv, logdet = gaussian.inv_logdet(S)
     np.testing.assert_allclose(inv, np.linalg.inv(S), rtol=1e-10, atol=1e-12)
