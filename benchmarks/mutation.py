@@ -66,6 +66,7 @@ GROUPS = {
                 ["test_highway_tracker.py", "test_highway_sim.py"]),
     "calibration": (["src/occtrack/models/calibration.py"], ["test_calibrate.py"]),
 }
+SLOW = {"highway", "calibration"}  # hours on one core: only when asked for
 DETECTED = {"killed", "timeout", "segfault"}
 UNDETECTED = {"survived", "no tests", "suspicious"}
 
@@ -165,8 +166,10 @@ def report(status: dict[str, str], equivalent: set[str]) -> float:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--modules", nargs="+", choices=sorted(GROUPS), default=sorted(GROUPS),
-                        help="module groups to mutate (default: all of the core)")
+    parser.add_argument("--modules", nargs="+", choices=sorted(GROUPS),
+                        default=sorted(set(GROUPS) - SLOW),
+                        help="module groups to mutate (default: all but the slow "
+                             f"{', '.join(sorted(SLOW))})")
     parser.add_argument("--tests", nargs="+", metavar="FILE",
                         help="test files (in tests/) to run, or 'all' (default: the groups' own)")
     parser.add_argument("--max-children", type=int, default=1,
