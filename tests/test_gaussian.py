@@ -8,7 +8,8 @@ from scipy.special import log_ndtr
 from scipy.stats import multivariate_normal
 
 from occtrack.densities import gaussian
-from occtrack.models.box import BoxMeasurement, edges_from_ltwh, ltwh_from_edges
+from occtrack.models.birth import EdgeBirths
+from occtrack.models.box import BoxMeasurement, edges_from_ltwh, ltwh_from_edges, ltwh_from_states
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 
@@ -122,6 +123,12 @@ def test_box_edges_round_trip_and_border_edges():
     model = BoxMeasurement((1920, 1080), edge_noise=0.075, border_margin=1.0)
     np.testing.assert_array_equal(model.observed(edges),
                                   [[[False, True], [True, True]], [[True, False], [True, False]]])
+    # an edge exactly at the margin is on the border; the defaults: 0.069 h, 1 px
+    at_margin = np.array([[[1.0, 1918.5], [1.5, 1078.5]], [[1.5, 1919.0], [1.0, 1079.0]]])
+    np.testing.assert_array_equal(BoxMeasurement((1920, 1080)).observed(at_margin),
+                                  [[[False, True], [True, True]], [[True, False], [False, False]]])
+    default = BoxMeasurement((1920, 1080))
+    assert (default.edge_noise, default.border_margin) == (0.069, 1.0)
 
 
 def test_border_edge_likelihood_is_probability_beyond_border_times_peak_density():
@@ -151,3 +158,101 @@ def test_markov_feature_forgets_its_ratio_every_half_second():
     assert p == pytest.approx(0.8 - 0.1 * 0.8)
     with pytest.raises(ValueError, match="outside"):
         TwoStateMarkov(1.5, 0.5)
+
+
+def test_box_conversions_keep_their_shapes_and_give_floats():
+    """ltwh <-> edges for one box (2, 2), a grid of them (K, M, 2, 2), and states to boxes:
+    left = c - s, width = 2 s per axis. Integer boxes give float edges."""
+    edges = edges_from_ltwh([[10, 20, 30, 40]])
+    assert edges.dtype == float and edges.tolist() == [[[10.0, 40.0], [20.0, 60.0]]]
+    assert ltwh_from_edges(edges[0]).tolist() == [10.0, 20.0, 30.0, 40.0]
+    grid = np.tile(edges[0], (3, 2, 1, 1))
+    assert ltwh_from_edges(grid).shape == (3, 2, 4)
+    states = np.array([[[100.0, 5.0, 20.0], [300.0, -2.0, 60.0]]])
+    assert ltwh_from_states(states).tolist() == [[80.0, 240.0, 40.0, 120.0]]
+
+
+def test_gates_widen_the_predicted_box_by_the_less_certain_edge():
+    """Per axis: [min(low, high) - k sd, max(low, high) + k sd] with sd the larger of the two
+    edges' standard deviations (the cross term plays no part)."""
+    zhat = np.array([[[100.0, 140.0], [50.0, 170.0]], [[140.0, 100.0], [170.0, 50.0]]])
+    S = np.tile(np.array([[[25.0, 20.0], [20.0, 9.0]], [[4.0, -3.0], [-3.0, 16.0]]]),
+                (2, 1, 1, 1))
+    gates = BoxMeasurement.gates(zhat, S, 3.0)
+    # the second box is inside out (low edge above the high one): the same gate
+    np.testing.assert_array_equal(gates, [[[85.0, 155.0], [38.0, 182.0]]] * 2)
+
+
+def test_edge_births_default_speed_unit_is_one_pixel():
+    births = EdgeBirths((640.0, 480.0), inward_speed=12.0, speed_std=3.0)
+    _, means, covs = births.components(1.0, 2.0, np.array([10.0, 30.0]), np.array([2.0, 5.0]))
+    assert means[0, 0, 1] == 12.0 and means[1, 0, 1] == -12.0
+    assert covs[4, 0, 1, 1] == 9.0
+
+
+@pytest.mark.parametrize("stationary,ratio,message", [
+    (-0.1, 0.5, r"^stationary probability -0.1 is outside \[0, 1\]$"),
+    (1.5, 0.5, r"^stationary probability 1.5 is outside \[0, 1\]$"),
+    (0.5, -0.2, r"^half-second ratio -0.2 is outside \[0, 1\]$"),
+    (0.5, 1.2, r"^half-second ratio 1.2 is outside \[0, 1\]$"),
+])
+def test_markov_feature_refuses_probabilities_outside_zero_one(stationary, ratio, message):
+    with pytest.raises(ValueError, match=message):
+        TwoStateMarkov(stationary, ratio)
+
+
+def test_markov_feature_accepts_the_ends_of_zero_one():
+    """Ratio 0: the feature never forgets; 1: it is back at the stationary value at once."""
+    for p in (0.0, 1.0):
+        assert TwoStateMarkov(p, 0.5).predict(0.5, 0.5) == pytest.approx(0.5 * p + 0.25)
+    assert TwoStateMarkov(0.8, 0.0).predict(0.3, 2.0) == pytest.approx(0.3, rel=1e-15)
+    assert TwoStateMarkov(0.8, 1.0).predict(0.3, 0.5) == 0.8
+
+
+def test_motion_refuses_a_velocity_time_that_is_not_positive():
+    for tau in (0.0, -1.0):
+        with pytest.raises(ValueError, match=f"^velocity_time must be positive, not {tau}$"):
+            ConstantVelocity(0.1, 1.0, 1.0, 1.0, velocity_time=tau)
+
+
+def test_predict_with_one_model_per_block_equals_the_plain_form():
+    """F and Q given per block (B, d, d): block b of every component moves with F_b, Q_b."""
+    rng = np.random.default_rng(5)
+    means, covs = random_components(rng, 4)
+    F = np.stack([np.eye(3) + rng.normal(0, 0.1, (3, 3)) for _ in range(2)])
+    Q = np.stack([np.diag(rng.uniform(1, 3, 3)) for _ in range(2)])
+    m2, P2 = gaussian.predict(means, covs, F, Q)
+    for k in range(4):
+        for b in range(2):
+            np.testing.assert_allclose(m2[k, b], F[b] @ means[k, b], rtol=1e-13)
+            np.testing.assert_allclose(P2[k, b], F[b] @ covs[k, b] @ F[b].T + Q[b], rtol=1e-12)
+
+
+@pytest.mark.parametrize("p,blocks", [(1, 2), (2, 1), (3, 2)])
+def test_inv_logdet_equals_linalg_for_every_size(p, blocks):
+    """Stacks (K, B, p, p) with B != p: the closed forms (p = 1, 2) and the general one."""
+    rng = np.random.default_rng(p)
+    a = rng.normal(size=(4, blocks, p, p))
+    S = a @ np.swapaxes(a, -1, -2) + np.eye(p)
+    inv, logdet = gaussian.inv_logdet(S)
+    np.testing.assert_allclose(inv, np.linalg.inv(S), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(logdet, np.linalg.slogdet(S)[1], rtol=1e-12)
+
+
+def test_loglik_of_three_blocks_without_a_mask_sums_the_blocks():
+    """B = 3 blocks of p = 2 rows, `observed` left out (all measured): the sum over blocks of
+    log N(z_b; H m_b, H P_b H' + R)."""
+    rng = np.random.default_rng(6)
+    means = rng.normal(0, 50, (3, 3, 3)) + 200
+    a = rng.normal(size=(3, 3, 3, 3))
+    covs = a @ np.swapaxes(a, -1, -2) * 10 + np.eye(3)
+    z = rng.normal(200, 50, (4, 3, 2))
+    R = np.eye(2) * 25.0
+    got = gaussian.loglik(means, covs, H, R, z)
+    np.testing.assert_allclose(got, gaussian.loglik(means, covs, H, R, z,
+                                                    np.ones(z.shape, dtype=bool)), rtol=1e-13)
+    for k in range(3):
+        for j in range(4):
+            expected = sum(multivariate_normal(H @ means[k, b], H @ covs[k, b] @ H.T + R)
+                           .logpdf(z[j, b]) for b in range(3))
+            assert got[k, j] == pytest.approx(expected, rel=1e-10)

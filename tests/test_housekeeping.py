@@ -16,8 +16,16 @@ import pytest
 # the tracker package first: importing gmpmb alone runs into the circular import
 # gmpmb -> tracker.config -> tracker/__init__ -> tracker.tracker -> gmpmb
 import occtrack.tracker  # noqa: F401
-from occtrack.filters.gmpmb import INITIAL_POOL, INITIAL_SLOTS, N_BIRTH, GaussianMixturePMB
+from occtrack.filters.gmpmb import (
+    INITIAL_POOL,
+    INITIAL_SLOTS,
+    N_BIRTH,
+    GaussianMixturePMB,
+    _cell_keys,
+    _packed_order,
+)
 from occtrack.models.box import edges_from_ltwh
+from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import NoOcclusion, OcclusionTerms
 from occtrack.tracker import TrackerConfig
 
@@ -715,6 +723,7 @@ def test_births_join_the_poisson_part_at_the_edges_and_everywhere():
     assert f.n == 5 and (f.label[:5] == -1).all()
     assert f.mass[:5] == pytest.approx([6 * dt] * 4 + [3 * dt + 50.0], rel=1e-15)
     assert (f.det[:5] == 0.85).all() and (f.occ[:5] == 0.4).all()
+    assert (f.coast[:5] == 0.0).all()  # not coasting: predicted with the configured motion
     half = [20.0, 60.0]
     expected = np.array([[[0, 45, 20], [H / 2, 0, 60]], [[W, -45, 20], [H / 2, 0, 60]],
                          [[W / 2, 0, 20], [0, 45, 60]], [[W / 2, 0, 20], [H, -45, 60]],
@@ -767,3 +776,418 @@ def test_a_new_filter_is_empty_and_counts_its_steps():
     for _ in range(2):
         f.step(z, np.ones(1))
     assert f.steps == 2 and f.iterations >= 1
+
+
+# -- the step's wiring: time step, classes, coasting, gating, loopy BP's settings -------------
+
+
+def test_step_takes_its_dt_and_a_filter_stepped_with_dt_equals_one_configured_with_it():
+    z = edges(person(905.0))
+    stepped, configured = make(capacity=0), make(capacity=0, fps=4.0)
+    for _ in range(3):
+        stepped.step(z, np.ones(1), dt=0.25)
+        configured.step(z, np.ones(1))
+    assert stepped.dt == 0.25 and stepped.n == configured.n
+    for name in ("mass", "mean", "cov", "det", "occ", "coast", "label"):
+        assert np.array_equal(getattr(stepped, name)[:stepped.n],
+                              getattr(configured, name)[:configured.n])
+
+
+@pytest.mark.parametrize("detection_class,taken", [(2, True), (1, False)])
+def test_an_object_takes_only_a_detection_of_its_own_class(detection_class, taken):
+    """An object of class 2 next to a detection: of class 2 it is hit (a hit child with d = 1
+    and most of the mass); of class 1 the pair is impossible, so the object fares exactly as
+    in a frame without detections, and the detection starts a Bernoulli of class 1."""
+    def stepped(z, classes):
+        f = make(clutter_rate=clutter_rate(1e-7))
+        load(f, [0.8], [0], det=0.9)
+        f.slot_class[0] = 2
+        f.step(z, np.ones(len(z)), classes=classes)
+        return f
+
+    f = stepped(edges(person(905.0, 396.0)), np.array([detection_class]))
+    mine = f.label[:f.n] == 0
+    assert (f.det[:f.n][mine] == 1.0).any() == taken
+    alone = stepped(np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64))
+    if taken:
+        assert f.existence()[0] > 0.9 > alone.existence()[0]
+    else:
+        assert f.existence()[0] == alone.existence()[0]
+        assert f.slot_used[1] and f.slot_class[1] == 1
+    assert f.slot_class.dtype == np.int64  # class ids stay integers
+
+
+def test_components_coast_once_more_than_half_their_mass_was_missed():
+    """The coasting model (velocity relaxing with coast_velocity_time) predicts a component
+    whose coasting time exceeds half a step; the others keep the configured motion (constant
+    velocity): a merged component's coasting time is its children's mass-weighted mean."""
+    f = make()
+    dt = f.config.dt
+    coast = np.array([0.0, 0.5 * dt, 0.6 * dt, dt, 3 * dt])
+    states = np.stack([person(900.0 + 40 * k, vx=30.0, vy=-12.0) for k in range(5)])
+    load(f, np.full(5, 0.5), np.full(5, -1), states)
+    f.coast[:5] = coast
+    f._predict()
+    for k in range(5):
+        F = f.coast_motion.F if coast[k] > 0.5 * dt else f.motion.F
+        assert np.allclose(f.mean[k], states[k] @ F.T, rtol=1e-14, atol=0)
+    assert f.mean[0, 0, 1] == 30.0 and f.mean[2, 0, 1] < 30.0 * 0.8
+
+
+def test_objects_not_confirmed_and_the_poisson_part_are_not_occludable():
+    """Occlusion explains the misses of confirmed objects only: a Bernoulli short of
+    confirm_hits and the Poisson part miss with 1 - d whatever v and q, and their o is carried
+    unchanged; a missed detectable source that cannot be occluded was undetectable (d' = 0)."""
+    f = make(FixedTerms(0.6, 0.3))
+    load(f, [0.8, 0.5], [0, -1], det=0.9, occ=0.5)
+    f.slot_hits[0], f.slot_age[0] = 1, 1
+    f._update(*EMPTY)
+    g = groups(f)
+    assert f.existence()[0] == pytest.approx(0.08 / 0.28, rel=1e-12)
+    assert f.mass[g[-1]].tolist() == [pytest.approx(0.05, rel=1e-12)]
+    assert f.det[:2].tolist() == [0.0, 0.0] and f.occ[:2].tolist() == [0.5, 0.5]
+    assert f.slot_hidden[0] == 0.0
+
+
+def test_slot_hidden_is_the_probability_that_the_miss_was_occlusions_doing():
+    """P(occluded | miss) = d o (1 - v + v q) / miss, miss = 1 - d (1 - o + o v) + d o v q,
+    mass-weighted over an object's components; 0 for every other slot, whatever it held."""
+    d, o, v, q = 0.7, 0.6, 0.6, 0.3
+    f = make(FixedTerms(v, q))
+    load(f, [0.5, 0.3, 0.4], [0, 0, 2], det=d, occ=o)
+    f.det[1], f.occ[1] = 0.4, 0.9
+    f.slot_hidden[:] = 0.7
+    f._update(*EMPTY)
+
+    def hidden_and_miss(d, o):
+        return d * o * (1 - v + v * q), 1 - d * (1 - o + o * v) + d * o * v * q
+
+    (h0, m0), (h1, m1) = hidden_and_miss(d, o), hidden_and_miss(0.4, 0.9)
+    expected = [(0.5 * h0 + 0.3 * h1) / (0.5 * m0 + 0.3 * m1), 0.0, h0 / m0, 0.0]
+    assert f.slot_hidden.tolist() == pytest.approx(expected, rel=1e-12)
+    assert f.slot_hidden[1] == 0.0 and f.slot_hidden[3] == 0.0
+
+
+def test_a_new_bernoullis_existence_weighs_the_poisson_part_against_clutter_per_area():
+    """One Poisson component at one detection, no objects: the new Bernoulli's existence is
+    L_0 / (L_0 + kappa p_F), L_0 = w d p(z | x), with p_F uniform over the image and over box
+    areas, clutter_rate / (W H max(area, 1 px^2)): a box smaller than a pixel counts as one
+    pixel. clutter_rate is chosen so that the existence is exactly 1/2."""
+    for half in ((0.25, 0.5), (0.5, 0.5), (20.0, 60.0)):
+        state = person(900.0, 400.0, half=half)
+        z = edges(state)
+        area = max(4 * half[0] * half[1], 1.0)
+        probe = make()
+        load(probe, [0.5], [-1], np.stack([state]), det=0.9)
+        lik = np.exp(probe.measurement.loglik(probe.mean[:1], probe.cov[:1], z,
+                                              probe.measurement.observed(z)))[0, 0]
+        L0 = 0.5 * 0.9 * lik
+        f = make(clutter_rate=L0 * 1920.0 * 1080.0 * area)
+        load(f, [0.5], [-1], np.stack([state]), det=0.9)
+        f.slot_coast[:], f.slot_class[:], f.slot_hidden[:] = 0.7, 5, 0.3  # a slot used before
+        f._update(z, f.measurement.observed(z), np.ones(1))
+        assert f.slot_used.tolist() == [True, False, False, False]
+        assert f.existence()[0] == pytest.approx(0.5, rel=1e-12)
+        # the new Bernoulli's slot starts afresh: one frame, one hit (this detection), not
+        # coasting, class 0 (no classes given), a serial never used before
+        assert (f.slot_age[0], f.slot_hits[0], f.slot_detection[0]) == (1, 1, 0)
+        assert (f.slot_coast[0], f.slot_class[0], f.slot_hidden[0]) == (0.0, 0, 0.0)
+        assert f.slot_serial[0] == 0 and f._next_serial == 1
+
+
+def association_edge(gating: bool, ratio: float) -> float:
+    """One confirmed object (r 0.8, d 0.9) and one detection 60 px off, with clutter such
+    that L = ratio miss kappa. Returns the object's existence after the update."""
+    probe = make()
+    load(probe, [0.8], [0], det=0.9)
+    z = edges(person(960.0, 400.0))
+    lik = np.exp(probe.measurement.loglik(probe.mean[:1], probe.cov[:1], z,
+                                          probe.measurement.observed(z)))[0, 0]
+    big_l, miss_obj = 0.8 * 0.9 * lik, 1 - 0.8 * 0.9
+    assert np.exp(-300) < big_l < 1e-12
+    kappa = big_l / (ratio * miss_obj)
+    f = make(gating=gating, clutter_rate=kappa * 1920.0 * 1080.0 * 40.0 * 120.0)
+    load(f, [0.8], [0], det=0.9)
+    f._update(z, f.measurement.observed(z), np.ones(1))
+    return f.existence()[0]
+
+
+@pytest.mark.parametrize("gating,ratio,kept", [(True, 0.5e-9, False), (True, 2e-9, True),
+                                               (False, 0.5e-9, True), (False, 1e-12, True)])
+def test_association_edges_below_the_floor_are_left_out_only_under_gating(gating, ratio, kept):
+    """An edge with L_ij < EDGE_FLOOR miss_i w_new_j (1e-9) cannot reach p_hit = 1e-9: under
+    gating it is left out and the object is simply missed, r' = r (1 - d) / miss_obj; kept, the
+    exact one-edge association gives p_hit = ratio / (1 + ratio) and r' = that times
+    (1 - p_hit) (its hit child is below prune_mass)."""
+    got = association_edge(gating, ratio)
+    pure_miss = 0.8 * 0.1 / (1 - 0.8 * 0.9)
+    p_hit = ratio / (1 + ratio) if kept else 0.0
+    assert got == pytest.approx(pure_miss * (1 - p_hit), rel=1e-13, abs=0)
+    assert (abs(got / pure_miss - 1) > 1e-13) == kept
+
+
+def two_by_two(**settings) -> GaussianMixturePMB:
+    """Two confirmed objects and two detections between them: a loop in the association
+    graph, so loopy BP takes several iterations."""
+    f = make(clutter_rate=clutter_rate(1e-9), **settings)
+    load(f, [0.9, 0.9], [0, 1], np.stack([person(900.0), person(930.0)]), det=0.9)
+    z = np.concatenate([edges(person(910.0)), edges(person(920.0))])
+    f._update(z, f.measurement.observed(z), np.ones(2))
+    return f
+
+
+def test_loopy_bp_stops_at_the_configured_tolerance_and_iteration_limit():
+    default = two_by_two().iterations
+    assert default > 3
+    assert two_by_two(lbp_max_iterations=3).iterations == 3
+    assert two_by_two(lbp_tolerance=1e-2).iterations < default
+    assert two_by_two(lbp_tolerance=1e-12).iterations > default
+
+
+def test_gated_pairs_are_those_whose_boxes_overlap_their_objects_gate():
+    """Above DENSE_PAIRS pairs, a component and a detection pair up when the detection's box
+    overlaps the gate of the component's object (the union of its components' gates) or, for
+    the Poisson part, the component's own gate; an axis with both edges on the border has no
+    extent. Checked against every pair by brute force, with their log-likelihoods."""
+    rng = np.random.default_rng(7)
+    f = make(capacity=256)
+    labels = np.sort(np.concatenate([np.full(40, -1), rng.integers(0, 4, 40)]))
+    n, M = len(labels), 60
+    means = np.stack([person(*rng.uniform([-300, -200], [2220, 1280]), half=rng.uniform(5, 60, 2))
+                      for _ in range(n)])  # some outside the image
+    load(f, np.full(n, 0.1), labels, means)
+    f.cov[:n] *= rng.uniform(0.2, 5.0, n)[:, None, None, None]
+    centre, half = rng.uniform([0, 0], [1920, 1080], (M, 2)), rng.uniform(5, 80, (M, 2))
+    z = np.clip(np.stack([centre - half, centre + half], axis=-1), 0, [[1920], [1080]])
+    z[0, 0] = [0.0, 1920.0]  # a box as wide as the image: its horizontal axis unmeasured
+    observed = f.measurement.observed(z)
+    assert n * M > 4096 and not observed[0, 0].any()
+    outside = (means[:, 0, 0] < -100) | (means[:, 0, 0] > 2020)
+    slots = np.flatnonzero(f.slot_used)
+    A = len(slots)
+    row_of_slot = np.full(len(f.slot_used), A)
+    row_of_slot[slots] = np.arange(A)
+    rows = np.where(labels >= 0, row_of_slot[np.maximum(labels, 0)], A)
+    mean, cov = f.mean[:n], f.cov[:n]
+    pk, pj, loglik, (cand_row, cand_col, cand_of_pair) = f._pairs(mean, cov, z, observed,
+                                                                  rows, A)
+    zhat, S = f.measurement.innovation(mean, cov)
+    gate = f.measurement.gates(zhat, S, f.config.gate_sigmas)
+    unit = gate.copy()
+    for row in range(A):
+        mine = rows == row
+        unit[mine, :, 0] = gate[mine, :, 0].min(axis=0)
+        unit[mine, :, 1] = gate[mine, :, 1].max(axis=0)
+    box = z.copy()
+    box[~observed.any(axis=2)] = [-np.inf, np.inf]
+    overlap = ((unit[:, None, :, 0] < box[None, :, :, 1])
+               & (box[None, :, :, 0] < unit[:, None, :, 1])).all(axis=2)
+    expected = set(zip(*np.nonzero(overlap), strict=True))
+    assert set(zip(pk.tolist(), pj.tolist(), strict=True)) == expected and len(pk) == len(
+        expected)
+    assert 0 < len(expected) < n * M
+    assert any(outside[k] and j == 0 for k, j in expected)  # reached by the full-width box
+    full = f.measurement.loglik(mean, cov, z, observed)
+    np.testing.assert_allclose(loglik, full[pk, pj], rtol=1e-10)
+    assert np.array_equal(cand_row[cand_of_pair], rows[pk])
+    assert np.array_equal(cand_col[cand_of_pair], pj)
+    objects = cand_row < A  # one candidate per (object, detection); per component for Poisson
+    assert len(set(zip(cand_row[objects].tolist(), cand_col[objects].tolist(),
+                       strict=True))) == objects.sum()
+
+
+def test_at_most_dense_pairs_every_pair_is_listed_and_above_only_gated_ones():
+    f = make(capacity=0)
+    for n, dense in ((64, True), (65, False)):
+        f._reserve(n)
+        load(f, np.full(n, 0.1), np.full(n, -1))
+        z = np.concatenate([edges(person(100.0 + 25 * j, 300.0)) for j in range(64)])
+        observed = f.measurement.observed(z)
+        pk, pj, _, cand = f._pairs(f.mean[:n], f.cov[:n], z, observed, np.zeros(n, int), 0)
+        assert (cand is None) == dense and (len(pk) == n * 64) == dense
+
+
+def test_each_poisson_component_is_gated_on_its_own():
+    """Above DENSE_PAIRS pairs, a detection's Poisson term L_0 sums only the components whose
+    own gate (3 edge standard deviations here) it overlaps: the new Bernoulli's existence is
+    the sum of its hit children l_k / (L_0 + kappa) above prune_mass, with that L_0, worked out
+    here from the per-pair likelihoods."""
+    rng = np.random.default_rng(11)
+    n = 4200
+    f = make(capacity=0, gate_sigmas=3.0, clutter_rate=clutter_rate(1e-9))
+    f._reserve(n)
+    means = np.stack([person(*rng.uniform([705, 196], [1105, 596])) for _ in range(n)])
+    load(f, np.full(n, 0.01), np.full(n, -1), means, det=0.9, cov_diag=(900.0, 100.0, 400.0))
+    z = edges(person(905.0, 396.0))
+    observed = f.measurement.observed(z)
+    zhat, S = f.measurement.innovation(f.mean[:n], f.cov[:n])
+    gate = f.measurement.gates(zhat, S, 3.0)
+    inside = ((gate[:, :, 0] < z[0, :, 1]) & (z[0, :, 0] < gate[:, :, 1])).all(axis=1)
+    lik = np.exp(f.measurement.loglik(f.mean[:n], f.cov[:n], z, observed)[:, 0])
+    L0 = (0.01 * 0.9 * lik[inside]).sum()
+    assert 0 < inside.sum() < n and (0.01 * 0.9 * lik[~inside]).sum() > 1e-9 * L0
+    f._update(z, observed, np.ones(1))
+    child = 0.01 * 0.9 * lik[inside] / (L0 + 1e-9)  # the hit children, pruned below 1e-5
+    assert f.existence()[0] == pytest.approx(child[child > 1e-5].sum(), rel=1e-12)
+    assert child[child > 1e-5].sum() > 0.9
+
+
+def test_children_are_pooled_per_parent_miss_child_first_then_hits_by_detection():
+    """Without merging, an object's children follow its components' order: per parent the
+    miss child (the parent's state), then its hit children in the order of the detections
+    (each pulled towards its detection)."""
+    f = make(clutter_rate=clutter_rate(1e-7))
+    load(f, [0.4, 0.4], [0, 0], np.stack([person(900.0), person(1000.0)]), det=0.9)
+    z = np.concatenate([edges(person(x)) for x in (1003.0, 903.0, 998.0, 897.0)])
+    f._update(z, f.measurement.observed(z), np.ones(4))
+    assert f.n == 6 and (f.label[:6] == 0).all()
+    shift = f.mean[:6, 0, 0] - np.repeat([900.0, 1000.0], 3)
+    assert np.sign(shift).tolist() == [0, 1, -1, 0, 1, -1]
+    assert (f.det[[0, 3]] < 1).all() and (f.det[[1, 2, 4, 5]] == 1).all()
+
+
+def test_an_update_that_outgrows_the_pool_keeps_every_child():
+    """A growing pool (capacity 0) that receives more children than it holds doubles and
+    ends with exactly what a pool large enough from the start holds."""
+    results = []
+    for capacity in (0, 4096):
+        f = make(capacity=capacity, clutter_rate=clutter_rate(1e-12))
+        n = 250
+        means = np.stack([person(880.0 + 0.2 * k, 400.0) for k in range(n)])
+        load(f, np.full(n, 0.005), np.full(n, -1), means, det=0.9)
+        z = np.concatenate([edges(person(x)) for x in (890.0, 905.0, 915.0)])
+        f._update(z, f.measurement.observed(z), np.ones(3))
+        results.append((f.n, [getattr(f, a)[:f.n].copy() for a in f._POOL]))
+    assert results[0][0] == results[1][0] > INITIAL_POOL
+    for a, b in zip(results[0][1], results[1][1], strict=True):
+        assert np.array_equal(a, b)
+
+
+def test_per_slot_bookkeeping_of_hits_misses_and_coasting_time():
+    """After an update a used slot holds the detection it took (p_hit > 1/2) or -1, one more
+    tracked frame, one more hit if it took one, and its coasting time: 0 after a hit, one dt
+    more after a miss. A detection it only may have taken (p_hit <= 1/2) is not counted;
+    unused slots keep their counts and coasting time (their detection is -1)."""
+    f = make(clutter_rate=clutter_rate(1e-7))
+    load(f, [0.8, 0.8, 0.8], [0, 1, 3], np.stack([person(900.0), person(1300.0),
+                                                  person(500.0)]), det=0.9)
+    f.slot_coast[:] = [0.2, 0.3, 0.4, 0.5]
+    f.slot_detection[:] = [5, 5, 5, 5]
+    f.slot_age[2], f.slot_hits[2] = 7, 7
+    z = np.concatenate([edges(person(1302.0)), edges(person(525.0))])  # slot 3: p_hit 0.27
+    f._update(z, f.measurement.observed(z), np.ones(2))
+    hits, age = f.config.confirm_hits, f.config.confirm_window
+    assert f.slot_detection.tolist() == [-1, 0, -1, -1]
+    assert f.slot_hits.tolist() == [hits, hits + 1, 7, hits]
+    assert f.slot_age.tolist() == [age + 1, age + 1, 7, age + 1]
+    assert f.slot_coast.tolist() == pytest.approx([0.2 + f.dt, 0.0, 0.4, 0.5 + f.dt], rel=1e-15)
+    assert 0 < f.existence()[3] and np.isin(f.label[:f.n], [0, 1, 3]).any()
+
+
+def test_a_doomed_bernoulli_in_slot_zero_goes_with_all_its_components():
+    f = make()
+    load(f, [0.5, 0.3, 0.5], [0, 0, 1], det=0.5)
+    f.slot_age[0], f.slot_hits[0] = 4, 1  # 1 hit of 4 frames: 3 of 5 is out of reach
+    f._update(*EMPTY)
+    assert f.slot_used.tolist() == [False, True, False, False]
+    assert set(f.label[:f.n].tolist()) == {1}
+
+
+def test_ties_in_existence_keep_the_older_bernoulli_then_the_earlier_measurement():
+    """Under a hard max_labels, equal existences rank in a fixed order: existing Bernoullis
+    by slot, then new ones by measurement."""
+    rng = np.random.default_rng(12)
+    L, M = 24, 16
+    f = make(max_labels=L)
+    f.slot_used[:] = True
+    r_old, r_new = rng.choice([0.5, 0.3, 0.2], L), rng.choice([0.5, 0.3, 0.2], M)
+    mass = np.concatenate([r_old, r_new])
+    label = np.concatenate([np.arange(L), np.full(M, -1)])
+    newborn = np.concatenate([np.full(L, -1), np.arange(M)])
+    with pytest.warns(RuntimeWarning, match="max_labels = 24"):
+        out = f._assign_labels(mass, label, newborn, M)
+    r_all = np.concatenate([r_old, r_new])
+    ranked = sorted(range(L + M), key=lambda i: (-r_all[i], i))[:L]
+    kept = np.zeros(L + M, dtype=bool)
+    kept[ranked] = True
+    assert ((out >= 0) == kept).all() and 0 < kept[L:].sum() < M and f.slot_used.all()
+
+
+def test_the_labels_warning_names_the_step_and_counts_exactly():
+    """The report of recycled labels: the step it happened at (steps taken + 1), how many
+    Bernoullis were eligible, how many went with the largest existence lost, and how many of
+    them were above report_existence (strictly: one at exactly 0.5 is not)."""
+    f = make(max_labels=2)
+    f.steps = 6
+    f.slot_used[:] = True
+    mass = np.array([0.9, 0.5, 0.8, 0.6])
+    with pytest.warns(RuntimeWarning) as record:
+        f._assign_labels(mass, np.array([0, 1, -1, -1]), np.array([-1, -1, 0, 1]), 2)
+    assert str(record[0].message).startswith(
+        "max_labels = 2 reached at step 7: 4 Bernoullis held existence >= 0.001, the 2 "
+        "weakest (existence up to 0.6; 1 of them above report_existence) were recycled")
+
+
+def test_duplicates_merge_when_the_cell_keys_do_not_pack():
+    """Cells far too small to merge anything but identical states, over a spread too wide for
+    one 62-bit key: the lexsort path still brings equal keys together (whatever comes before
+    them) and merges exactly those, and nothing else."""
+    f = make()
+    far = person(1800.0, 1000.0, vx=400.0, vy=-300.0)
+    states = [person(900.0), person(900.0, vx=5.0), person(900.0), far, person(900.0)]
+    mean = np.stack(states)
+    cov = np.tile(np.diag([25.0, 100.0, 4.0]), (5, 2, 1, 1))
+    mass, det = np.array([0.1, 0.2, 0.3, 0.4, 0.05]), np.array([0.9, 0.8, 0.7, 0.6, 0.5])
+    label = np.array([0, -1, 1, 0, 0])
+    assert not _packed_order(_cell_keys(mean, label, np.full(6, 1e-6)))[0]
+    out = f._merge(mass, mean, cov, det, det.copy(), np.zeros(5), label)
+    assert len(out[0]) == 4
+    merged = np.flatnonzero(np.isclose(out[0], 0.15))
+    assert len(merged) == 1 and out[6][merged[0]] == 0
+    assert out[3][merged[0]] == pytest.approx((0.1 * 0.9 + 0.05 * 0.5) / 0.15, rel=1e-12)
+    assert sorted(out[0].tolist()) == pytest.approx([0.15, 0.2, 0.3, 0.4], rel=1e-15)
+
+
+@pytest.mark.parametrize("seed", [134, 156, 198])
+def test_select_keeps_exactly_the_heaviest_for_any_room(seed):
+    """Random pools and capacities, including ones where a partition one place off would
+    keep a wrong child."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(20, 3000))
+    room = int(rng.integers(3, n - 3))
+    flat = rng.random(n)
+    f = make(capacity=room + N_BIRTH)
+    with pytest.warns(RuntimeWarning, match=f"capacity = {room + N_BIRTH} "):
+        keep = f._select(flat)
+    assert np.array_equal(keep, np.sort(np.argsort(-flat)[:room]))
+
+
+def test_the_capacity_warning_names_the_step():
+    f = make()
+    f.steps = 11
+    with pytest.warns(RuntimeWarning, match=r"capacity = 16 Gaussian components reached at "
+                                            r"step 12: 20 were above prune_mass, the 9 "):
+        f._select(np.linspace(0.1, 0.3, 20))
+
+
+def test_motion_and_survival_for_a_step_of_dt():
+    """The motion models and the survival probability of a step of dt seconds, for the
+    configured dt and for one given to the step (rebuilt when dt returns)."""
+    f = make(position_noise=2.0, velocity_noise=7.0, size_noise=0.5, velocity_time=4.0,
+             coast_velocity_time=0.3, death_rate=0.2)
+    for dt in (f.config.dt, 0.25, f.config.dt, 0.25):
+        f._use_dt(dt)
+        assert f.dt == dt
+        assert f.motion == ConstantVelocity(dt, 2.0, 7.0, 0.5, 4.0)
+        assert f.coast_motion == ConstantVelocity(dt, 2.0, 7.0, 0.5, 0.3)
+        assert f.survival_inside == pytest.approx(np.exp(-0.2 * dt), rel=1e-15)
+
+
+def test_object_means_are_the_first_two_object_moments():
+    f = make()
+    load(f, [0.3, 0.1, 0.5], [0, 0, 2])
+    r, means = f.object_means()
+    r2, means2, _ = f.object_moments()
+    assert np.array_equal(r, r2) and np.array_equal(means, means2)
+    assert r.tolist() == pytest.approx([0.4, 0.0, 0.5, 0.0], rel=1e-15)
+    assert means[0, 0, 0] == pytest.approx((0.3 * 900.0 + 0.1 * 940.0) / 0.4, rel=1e-15)

@@ -7,7 +7,13 @@ import pytest
 
 from occtrack.cli import main
 from occtrack.filters.beam_bernoulli import update_bernoulli
-from occtrack.models.beam import BeamModel, gaussian_likelihood_ratio, likelihood_ratio, regime
+from occtrack.models.beam import (
+    BeamModel,
+    gaussian_likelihood_ratio,
+    hidden_probability,
+    likelihood_ratio,
+    regime,
+)
 from occtrack.scenarios.lidar import simulate_beams
 
 MODEL = BeamModel(p_d=0.8, sigma=0.5, clutter_rate=0.5, max_range=40.0)
@@ -77,3 +83,56 @@ def test_cli_rejects_bad_settings(capsys):
     assert "p_d must lie in [0, 1]" in capsys.readouterr().err
     assert main(["lidar", "--range", "80"]) == 1
     assert "--range must lie inside" in capsys.readouterr().err
+
+
+def test_a_beam_with_no_return_says_only_that_nothing_was_detected():
+    """z = max_range (nothing returned): nothing hides anything (q = 0) and the ratio is the
+    miss probability 1 - p_d wherever the object is, even right at max_range; the Gaussian
+    form has the broadcast shape of mean and variance."""
+    far = MODEL.max_range
+    x = np.array([far - 0.1, far, far + 1.0])
+    assert hidden_probability(far, x, MODEL).tolist() == [0.0, 0.0, 0.0]
+    assert likelihood_ratio(far, x, MODEL).tolist() == [1 - MODEL.p_d] * 3
+    assert hidden_probability(far - 1e-9, far + 1.0, MODEL) > 0.9
+    got = gaussian_likelihood_ratio(far, np.full((3, 1), far), np.full(4, 0.25), MODEL)
+    assert got.shape == (3, 4) and (got == 1 - MODEL.p_d).all()
+    assert gaussian_likelihood_ratio(far, far, np.full(2, 0.25), MODEL).shape == (2,)
+    assert gaussian_likelihood_ratio(far - 1e-9, far, 0.25, MODEL) > 1
+
+
+def test_regime_boundary_is_a_hit():
+    """|z_hat - z| exactly width sigma is still "hit" (0.5 and 1.5 are exact in binary)."""
+    assert regime([8.5, 11.5, 8.4, 11.6], 10.0, MODEL).tolist() == [
+        "hit", "hit", "passed", "hidden"]
+
+
+@pytest.mark.parametrize("settings,message", [
+    (dict(p_d=-0.1), r"^p_d must lie in \[0, 1\]$"),
+    (dict(p_d=1.1), r"^p_d must lie in \[0, 1\]$"),
+    (dict(sigma=0.0), "^sigma, clutter_rate and max_range must be positive$"),
+    (dict(clutter_rate=0.0), "^sigma, clutter_rate and max_range must be positive$"),
+    (dict(max_range=0.0), "^sigma, clutter_rate and max_range must be positive$"),
+])
+def test_beam_model_refuses_bad_settings(settings, message):
+    with pytest.raises(ValueError, match=message):
+        BeamModel(**settings)
+
+
+def test_beam_model_accepts_the_ends_of_its_ranges():
+    for p_d in (0.0, 1.0):
+        assert BeamModel(p_d=p_d).p_d == p_d
+    small = BeamModel(sigma=1e-3, clutter_rate=1e-3, max_range=0.5)
+    assert small.kappa == pytest.approx(2e-3, rel=1e-15)
+
+
+def test_bernoulli_update_takes_unnormalised_weights_and_returns_normalised_ones():
+    rng = np.random.default_rng(1)
+    particles = rng.normal(20.0, 0.3, 500)
+    weights = rng.uniform(0.5, 1.5, 500)
+    r, w = update_bernoulli(0.6, particles, weights, 20.2, MODEL)
+    r_unit, w_unit = update_bernoulli(0.6, particles, weights / weights.sum(), 20.2, MODEL)
+    assert r == pytest.approx(r_unit, rel=1e-12) and w.sum() == pytest.approx(1.0, rel=1e-12)
+    np.testing.assert_allclose(w, w_unit, rtol=1e-12)
+    lik = likelihood_ratio(20.2, particles, MODEL)
+    mean_lik = np.sum(weights * lik) / weights.sum()
+    assert r == pytest.approx(0.6 * mean_lik / (0.4 + 0.6 * mean_lik), rel=1e-12)

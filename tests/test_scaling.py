@@ -179,6 +179,7 @@ def test_a_hard_limit_is_reported_once_with_the_count(setting, limit, pattern):
     said = [w for w in caught if issubclass(w.category, RuntimeWarning)]
     assert len(said) == 1
     assert re.search(pattern, str(said[0].message))
+    assert said[0].filename == __file__  # it points at the caller of Tracker.step
     if setting == "max_labels":
         assert tracker.filter.slot_used.sum() <= limit and len(tracks) <= limit
     else:
