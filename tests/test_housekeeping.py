@@ -1003,8 +1003,13 @@ def test_at_most_dense_pairs_every_pair_is_listed_and_above_only_gated_ones():
         load(f, np.full(n, 0.1), np.full(n, -1))
         z = np.concatenate([edges(person(100.0 + 25 * j, 300.0)) for j in range(64)])
         observed = f.measurement.observed(z)
+        # (rows all 0 with A = 0: every component is the Poisson part's)
         pk, pj, _, cand = f._pairs(f.mean[:n], f.cov[:n], z, observed, np.zeros(n, int), 0)
-        assert (cand is None) == dense and (len(pk) == n * 64) == dense
+        assert (len(pk) == n * 64) == dense
+        if dense:  # component-major, and no object row: no candidate edge
+            assert np.array_equal(pk, np.repeat(np.arange(n), 64))
+            assert np.array_equal(pj, np.tile(np.arange(64), n))
+            assert len(cand[0]) == len(cand[1]) == 0
 
 
 def test_each_poisson_component_is_gated_on_its_own():

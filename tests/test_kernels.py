@@ -92,14 +92,23 @@ def test_object_moments_are_each_slots_mixture_moments():
         np.testing.assert_allclose(sd[i], np.sqrt(var), rtol=1e-12)
 
 
-def test_object_sums_are_bincounts():
+def test_object_misses_are_bincounts():
+    """miss_i = 1 - r_i + sum w miss (floored at 1e-300) per object row, and each used slot's
+    share of its miss mass that occlusion explains, sum w d o (1 - v + v q) / sum w miss."""
     rng = np.random.default_rng(3)
-    rows = rng.integers(0, 6, 50)
-    mass, miss, hidden = rng.random((3, 50))
-    got = gmpmb._object_sums(rows, 7, mass, miss, hidden)
-    for out, weights in zip(got, (mass, mass * miss, mass * hidden), strict=True):
-        np.testing.assert_allclose(out, np.bincount(rows, weights, minlength=7), rtol=1e-13)
-    assert got[0][6] == 0.0
+    A, n = 6, 50
+    rows = rng.integers(0, A + 1, n)  # row A: the Poisson part
+    mass, miss, det, occ, v, q = rng.random((6, n))
+    slots = np.array([0, 2, 3, 5, 7, 8])  # the used slots, one per object row
+    slot_hidden = np.full(10, 0.5)
+    miss_obj = gmpmb._object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden)
+    r = np.bincount(rows, mass, minlength=A + 1)[:A]
+    miss_mass = np.bincount(rows, mass * miss, minlength=A + 1)[:A]
+    hidden = np.bincount(rows, mass * (det * occ * (1 - v + v * q)), minlength=A + 1)[:A]
+    np.testing.assert_allclose(miss_obj, np.maximum(1 - r + miss_mass, 1e-300), rtol=1e-13)
+    expected = np.zeros(10)
+    expected[slots] = hidden / miss_mass
+    np.testing.assert_allclose(slot_hidden, expected, rtol=1e-13)
 
 
 def test_child_features_are_bayes_for_the_miss_and_the_hit_children():
