@@ -12,7 +12,7 @@ import pytest
 
 import occtrack
 from occtrack import Tracker, TrackerConfig, Tracks
-from occtrack.tracker.boxes import from_ltwh, to_ltwh
+from occtrack.tracker.boxes import checked_frame, from_ltwh, to_ltwh
 
 
 def walkers(frames: int = 40, speed: float = 150.0, fps: float = 30.0) -> list[np.ndarray]:
@@ -155,6 +155,30 @@ def test_update_rejects_bad_input_with_clear_messages():
     assert len(tracker.update(np.zeros((0, 4)))) == 0
     with pytest.raises(ValueError, match="TrackerConfig"):
         Tracker({"fps": 30})
+
+
+def test_the_fast_check_of_a_frame_agrees_with_the_full_one_or_defers_to_it():
+    """Float64 arrays of finite boxes and scores take the fast path: the same copy the full
+    checks give, sizes below 1 px raised to 1, the caller's array untouched; anything else
+    (NaN, a negative size, lists, float32, a shape mismatch) gives None, so that the full
+    checks run and name the problem."""
+    rng = np.random.default_rng(0)
+    boxes = np.column_stack([rng.uniform(0, 600, (20, 2)), rng.uniform(0, 3, (20, 2))])
+    boxes[0, 2:] = [0.0, -0.0]
+    scores = rng.random(20)
+    given = boxes.copy()
+    full = to_ltwh(boxes, "ltwh")
+    full[:, 2:] = np.maximum(full[:, 2:], 1.0)
+    fast = checked_frame(boxes, scores)
+    assert fast is not boxes and np.array_equal(fast, full) and np.array_equal(boxes, given)
+    assert checked_frame(np.zeros((0, 4)), np.zeros(0)).shape == (0, 4)
+    for bad_boxes, bad_scores in ((np.where(boxes == boxes[3, 1], np.nan, boxes), scores),
+                                  (boxes, np.where(scores == scores[5], np.inf, scores)),
+                                  (boxes * [1, 1, 1, -1], scores), (boxes.tolist(), scores),
+                                  (boxes.astype(np.float32), scores), (boxes, scores[:-1])):
+        assert checked_frame(bad_boxes, bad_scores) is None
+    with pytest.raises(ValueError, match="negative width or height"):
+        Tracker(TrackerConfig(image_size=(640, 480), fps=30)).step(boxes * [1, 1, 1, -1], scores)
 
 
 def test_run_refuses_a_file_name_instead_of_iterating_its_characters(tmp_path):

@@ -7,11 +7,14 @@ labels, DETR). `Tracker.update` takes and returns any of them.
 
 from __future__ import annotations
 
+import math
 import numbers
 from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
+
+from occtrack.jit import njit
 
 BoxFormat = Literal["xyxy", "ltwh", "cxcywh"]
 BOX_FORMATS: tuple[str, ...] = ("xyxy", "ltwh", "cxcywh")
@@ -116,3 +119,34 @@ def check_time(value: object, what: str) -> float:
     if not np.isfinite(value):
         raise ValueError(f"{what} must be a finite number of seconds, not {value}")
     return value
+
+
+def checked_frame(boxes: object, scores: object) -> np.ndarray | None:
+    """The fast path of `Tracker.step`'s checks, for what a detector loop hands it: float64
+    arrays (M, 4) of boxes left, top, width, height and (M,) scores, all finite, no size
+    negative; then a copy of the boxes with sizes below 1 px raised to 1. None for anything
+    else: the full checks (`to_ltwh`, `check_scores`) then run and say what is wrong."""
+    if (type(boxes) is np.ndarray and boxes.dtype == np.float64 and boxes.ndim == 2
+            and boxes.shape[1] == 4 and type(scores) is np.ndarray
+            and scores.dtype == np.float64 and scores.shape == (len(boxes),)):
+        ok, out = _checked_ltwh(boxes, scores)
+        if ok:
+            return out
+    return None
+
+
+@njit
+def _checked_ltwh(boxes, scores):
+    """(all finite and no size negative, the boxes with sizes floored at 1 px)."""
+    out = np.empty((len(boxes), 4))
+    for j in range(len(boxes)):
+        if not math.isfinite(scores[j]):
+            return False, out
+        for c in range(4):
+            if not math.isfinite(boxes[j, c]):
+                return False, out
+        if boxes[j, 2] < 0.0 or boxes[j, 3] < 0.0:
+            return False, out
+        out[j, 0], out[j, 1] = boxes[j, 0], boxes[j, 1]
+        out[j, 2], out[j, 3] = max(boxes[j, 2], 1.0), max(boxes[j, 3], 1.0)
+    return True, out

@@ -44,6 +44,7 @@ from occtrack.tracker.boxes import (
     check_format,
     check_scores,
     check_time,
+    checked_frame,
     from_ltwh,
     to_ltwh,
 )
@@ -224,14 +225,18 @@ class Tracker:
         without it the camera's shift is estimated from the detections
         (`camera_motion = "detections"`) or taken as none. Boxes of the returned tracks are
         left, top, width, height."""
-        boxes = to_ltwh(boxes, "ltwh")
-        scores = check_scores(scores, len(boxes))
+        checked = checked_frame(boxes, scores)
+        if checked is None:
+            boxes = to_ltwh(boxes, "ltwh")
+            scores = check_scores(scores, len(boxes))
+            boxes[:, 2:] = np.maximum(boxes[:, 2:], 1.0)
+        else:
+            boxes = checked
         labels = check_classes(classes, len(boxes))
         if dt is not None:
             dt = check_time(dt, "dt")
             if dt <= 0:
                 raise ValueError(f"dt must be a positive number of seconds, not {dt}")
-        boxes[:, 2:] = np.maximum(boxes[:, 2:], 1.0)
         camera = None
         if camera_motion is not None:
             affine = np.asarray(camera_motion, dtype=float)
