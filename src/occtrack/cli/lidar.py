@@ -47,8 +47,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from occtrack.models.beam import BeamModel, likelihood_ratio, regime
-    from occtrack.scenarios.lidar import empirical_ratio
+    from occtrack.models.beam import BeamModel, regime
+    from occtrack.scenarios.lidar import binned_ratio, empirical_ratio, probe_bins
 
     try:
         model = BeamModel(args.p_d, args.sigma, args.clutter_rate, args.max_range)
@@ -58,17 +58,14 @@ def run(args: argparse.Namespace) -> int:
         raise OcctrackError("--range must lie inside (0, --max-range) and --samples be >= 1000")
     rng = np.random.default_rng(args.seed)
     x, s = args.x, args.sigma
-    probes = np.array([x / 2, x - 3 * s, x, x + 2 * s, x + 6 * s])
-    half = s / 4
-    edges = np.sort(np.concatenate([probes - half, probes + half]))
+    probes, half, edges = probe_bins(x, s)
     ratio, se = empirical_ratio(model, x, edges, args.samples, rng)
+    derived = binned_ratio(probes, half, x, model)
     print(f"Beam likelihood ratio L(z | x) for an object at x = {x:g} m (P_D {model.p_d}, "
           f"sigma {s} m, {model.clutter_rate} clutter returns per beam):")
     print(f"  {'z (m)':>8}  {'regime':<7}  {'L (derived)':>12}  {'L (simulated)':>18}")
     for k, z in enumerate(probes):
-        z_grid = np.linspace(z - half, z + half, 201)
-        derived = float(np.mean(likelihood_ratio(z_grid, x, model)))
-        print(f"  {z:8.2f}  {regime(x, z, model)!s:<7}  {derived:12.3f}  "
+        print(f"  {z:8.2f}  {regime(x, z, model)!s:<7}  {derived[k]:12.3f}  "
               f"{ratio[2 * k]:10.3f} +- {se[2 * k]:.3f}")
     print(f"  no return: L = 1 - P_D = {1 - model.p_d:.3f}")
     if args.figure is not None:

@@ -686,20 +686,16 @@ def _run_lidar(cell: Cell) -> dict:
     landed)."""
     import numpy as np
 
-    from occtrack.models.beam import likelihood_ratio
-    from occtrack.scenarios.lidar import simulate_beams
+    from occtrack.scenarios.lidar import binned_ratio, probe_bins, simulate_beams
 
     model = _beam_model(cell.values, "sweep settings")
     x, s = float(cell.source), model.sigma
     rng = np.random.default_rng(cell.seed)
     start = time.perf_counter()
-    probes = np.array([x / 2, x - 3 * s, x, x + 2 * s, x + 6 * s])
-    half = s / 4
-    edges = np.sort(np.concatenate([probes - half, probes + half]))
+    probes, half, edges = probe_bins(x, s)
     with_object = np.histogram(simulate_beams(x, model, cell.steps, rng), edges)[0][::2]
     without = np.histogram(simulate_beams(None, model, cell.steps, rng), edges)[0][::2]
-    derived = np.array([np.mean(likelihood_ratio(np.linspace(z - half, z + half, 201), x,
-                                                 model)) for z in probes])
+    derived = binned_ratio(probes, half, x, model)
     spread = np.sqrt(derived * without * (1 + derived))
     z = np.divide(with_object - derived * without, spread, out=np.zeros(len(probes)),
                   where=spread > 0)
