@@ -42,16 +42,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 EQUIVALENT = ROOT / "benchmarks" / "mutation_equivalent.md"
 
-# module group -> (files mutated, the tests that exercise them). The highway's particle filter
-# and sensor model and the detector calibration are groups of their own: their tests run for
-# tens of seconds (a highway run, a calibration on simulated sequences), which makes them hours
-# of mutation testing on one core.
+# module group -> (files mutated, the tests that exercise them). The highway's particle filter,
+# sensor model and occlusion handlers and the detector calibration are groups of their own:
+# their tests run for tens of seconds (a highway run, a calibration on simulated sequences),
+# which makes them hours of mutation testing on one core.
 BOX_MODELS = [f"src/occtrack/models/{name}.py" for name in ("birth", "box", "markov", "motion")]
+# the box tracker's occlusion models (the highway's, extents.py and highway.py, go with it)
+BOX_OCCLUSION = ("base", "boxes", "box_geometry", "box_measurementwise", "box_objectwise")
 GROUPS = {
     "filters": (["src/occtrack/filters/gmpmb.py", "src/occtrack/filters/beam_bernoulli.py"],
                 ["test_housekeeping.py", "test_tracker.py", "test_kernels.py", "test_lidar.py"]),
     "association": (["src/occtrack/association/*"], ["test_lbp.py", "test_association_exact.py"]),
-    "occlusion": (["src/occtrack/occlusion/*"],
+    "occlusion": ([f"src/occtrack/occlusion/{name}.py" for name in BOX_OCCLUSION],
                   ["test_box_occlusion.py", "test_occlusion_terms.py", "test_tracker.py",
                    "test_housekeeping.py"]),
     "models": ([*BOX_MODELS, "src/occtrack/models/beam.py"],
@@ -62,8 +64,9 @@ GROUPS = {
                ["test_io_mot.py", "test_eval.py", "test_cli_track.py"]),
     "gospa": (["src/occtrack/metrics/gospa.py", "src/occtrack/spatial.py"],
               ["test_gospa.py", "test_gospa_exact.py", "test_eval.py", "test_scaling.py"]),
-    "highway": (["src/occtrack/filters/particle_tomb.py", "src/occtrack/models/highway_sensor.py"],
-                ["test_highway_tracker.py", "test_highway_sim.py"]),
+    "highway": (["src/occtrack/filters/particle_tomb.py", "src/occtrack/models/highway_sensor.py",
+                 "src/occtrack/occlusion/extents.py", "src/occtrack/occlusion/highway.py"],
+                ["test_highway_tracker.py", "test_highway_sim.py", "test_highway_kernels.py"]),
     "calibration": (["src/occtrack/models/calibration.py"], ["test_calibrate.py"]),
 }
 SLOW = {"highway", "calibration"}  # hours on one core: only when asked for

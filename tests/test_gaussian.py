@@ -165,6 +165,13 @@ def test_box_conversions_keep_their_shapes_and_give_floats():
     left = c - s, width = 2 s per axis. Integer boxes give float edges."""
     edges = edges_from_ltwh([[10, 20, 30, 40]])
     assert edges.dtype == float and edges.tolist() == [[[10.0, 40.0], [20.0, 60.0]]]
+    # single-precision boxes are summed in double: the right edge of 0.1f + 0.8f is not
+    # float32's rounded sum
+    single = np.array([[0.1, 0.2, 0.8, 0.7]], dtype=np.float32)
+    low, size = single[0, :2].astype(float), single[0, 2:].astype(float)
+    assert edges_from_ltwh(single)[0].tolist() == np.stack([low, low + size], -1).tolist()
+    assert float(np.float32(0.1) + np.float32(0.8)) != float(np.float32(0.1)) + float(
+        np.float32(0.8))
     assert ltwh_from_edges(edges[0]).tolist() == [10.0, 20.0, 30.0, 40.0]
     grid = np.tile(edges[0], (3, 2, 1, 1))
     assert ltwh_from_edges(grid).shape == (3, 2, 4)

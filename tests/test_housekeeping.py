@@ -461,6 +461,18 @@ def test_the_weakest_labels_are_recycled_when_slots_run_out():
     assert f.slot_used.tolist() == [True, True]
 
 
+def test_a_recycled_slot_zero_frees_its_components_before_a_newborn_takes_it():
+    """Slot 0's Bernoulli (r 0.2) is the weakest under max_labels = 2: its component goes to
+    the Poisson part (label -1), and the newborn of measurement 0 (r 0.6) opens slot 0."""
+    f = make(max_labels=2)
+    f.slot_used[:] = True
+    mass = np.array([0.2, 0.9, 0.6, 0.1])
+    with pytest.warns(RuntimeWarning, match="max_labels = 2"):
+        out = f._assign_labels(mass, np.array([0, 1, -1, -1]), np.array([-1, -1, 0, 1]), 2)
+    assert out.tolist() == [-1, 1, 0, -1]
+    assert f.slot_used.tolist() == [True, True] and f.slot_detection[0] == 0
+
+
 def test_label_min_existence_is_inclusive_and_empty_objects_are_recycled():
     """r exactly at label_min_existence keeps (or gets) a label; a slot left with no component
     (all its children pruned) is freed."""
@@ -743,6 +755,19 @@ def test_births_join_the_poisson_part_at_the_edges_and_everywhere():
     assert g.n == 4  # a component of mass 0 is not added
     masses = g.births.components(1, 2, np.array([20.0, 60.0]), np.array([4.0, 9.0]))[0]
     assert masses.dtype == float
+
+
+def test_births_into_a_full_growing_pool_make_it_grow():
+    """capacity = 0 and every entry of the pool in use: the five births are appended after
+    the components held, which stay as they were."""
+    f = make(capacity=0)
+    n = len(f.mass)
+    load(f, np.full(n, 0.01), np.full(n, -1))
+    before = f.mean[:n].copy()
+    f._add_births()
+    assert f.n == n + 5 and len(f.mass) == len(f.label) == 2 * n
+    assert np.array_equal(f.mean[:n], before) and (f.mass[:n] == 0.01).all()
+    assert (f.label[:n + 5] == -1).all() and (f.mass[n:n + 5] > 0).all()
 
 
 def test_birth_size_prior_from_settings_defaults_and_detections():
@@ -1087,6 +1112,13 @@ def test_per_slot_bookkeeping_of_hits_misses_and_coasting_time():
     assert f.slot_age.tolist() == [age + 1, age + 1, 7, age + 1]
     assert f.slot_coast.tolist() == pytest.approx([0.2 + f.dt, 0.0, 0.4, 0.5 + f.dt], rel=1e-15)
     assert 0 < f.existence()[3] and np.isin(f.label[:f.n], [0, 1, 3]).any()
+
+
+def test_confirmed_slots_are_used_ones_with_confirm_hits_or_more():
+    f = make(confirm_hits=3)
+    f.slot_used[:] = [True, True, True, False]
+    f.slot_hits[:] = [3, 2, 4, 9]
+    assert f.confirmed().tolist() == [True, False, True, False]
 
 
 def test_a_doomed_bernoulli_in_slot_zero_goes_with_all_its_components():

@@ -5,6 +5,8 @@ the full table with weights, skips and sure occlusions."""
 from __future__ import annotations
 
 import warnings
+from functools import reduce
+from operator import mul
 
 import numpy as np
 import pytest
@@ -116,6 +118,34 @@ def test_sparse_visible_equals_the_full_table(with_weights, with_skip):
     np.testing.assert_allclose(full, np.prod(1 - p, axis=1), rtol=1e-12)
 
 
+def in_order(factors):
+    """prod over the last axis, multiplied left to right as the compiled full table does."""
+    return np.array([reduce(mul, row.tolist(), 1.0) for row in factors])
+
+
+def test_single_precision_boxes_are_computed_in_double():
+    """float32 boxes give the numbers of the same boxes in float64 (float32 arithmetic would
+    round overlaps and heights differently), in the table and in both forms of `visible`."""
+    rng = np.random.default_rng(5)
+    hidden, occluders = crowd(rng, 80).astype(np.float32), crowd(rng, 70).astype(np.float32)
+    geometry = BoxOcclusionGeometry()
+    wide = hidden.astype(float), occluders.astype(float)
+    table = geometry(*wide)
+    assert (table > 0).sum() > 100
+    assert np.array_equal(geometry(hidden, occluders), table)
+    for sparse in (False, True):
+        assert np.array_equal(geometry.visible(hidden, occluders, sparse=sparse),
+                              geometry.visible(*wide, sparse=sparse))
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_without_occluders_every_box_is_visible(sparse):
+    geometry = BoxOcclusionGeometry()
+    nothing = np.zeros((0, 2, 2))
+    assert geometry.visible(np.array([A, BEHIND]), nothing, sparse=sparse).tolist() == [1.0, 1.0]
+    assert geometry.visible(nothing, np.array([A]), sparse=sparse).shape == (0,)
+
+
 @pytest.mark.parametrize("settings,message", [
     (dict(gain=0.0), "occlusion gain must be positive"),
     (dict(gain=-1.0), "occlusion gain must be positive"),
@@ -173,10 +203,10 @@ def test_without_gating_the_models_build_the_full_tables():
     """gating False: the terms are the full K x N table's numbers to the last bit (the
     checking mode); gating True: the overlapping pairs' numbers, equal up to rounding."""
     rng = np.random.default_rng(11)
-    comps, z = crowd(rng, 80), crowd(rng, 70)
+    comps, z = crowd(rng, 130), crowd(rng, 70)
     means = states(*comps)
-    owner = np.repeat(np.arange(40), 2)
-    existence = rng.uniform(0.2, 1.0, 40)
+    owner = np.repeat(np.arange(65), 2)  # 130 x 65 mean boxes: above DENSE_PAIRS too
+    existence = rng.uniform(0.2, 1.0, 65)
     geometry = BoxOcclusionGeometry()
     for gating in (False, True):
         ctx = context(means, owner, existence, z)
@@ -189,16 +219,16 @@ def test_without_gating_the_models_build_the_full_tables():
         seen = 1 - np.prod(1 - p, axis=-1)
         ow = ObjectWiseExpectedValue().terms(ctx).visible
         if not gating:
-            # (the compiled product multiplies in another order: equal to rounding)
-            same = dict(rtol=1e-14, atol=1e-15)
-            np.testing.assert_allclose(mw.hidden, hidden, **same)
-            np.testing.assert_allclose(mw.seen_hidden, seen, **same)
-            np.testing.assert_allclose(MeasurementWise().seen_hidden(z, sparse=False), seen,
-                                       **same)
+            # the full table multiplied occluder by occluder, to the last bit
+            assert np.array_equal(mw.hidden, 1 - in_order(1 - geometry(boxes, z)))
+            assert np.array_equal(mw.seen_hidden, 1 - in_order(1 - p))
+            assert np.array_equal(MeasurementWise().seen_hidden(z, sparse=False),
+                                  1 - in_order(1 - p))
             mean = (boxes[0::2] + boxes[1::2]) / 2  # each object's two components, weights 1
             q = geometry(boxes, mean) * existence
-            q[owner[:, None] == np.arange(40)] = 0.0  # never by itself
-            np.testing.assert_allclose(ow, np.prod(1 - q, axis=-1), **same)
+            q[owner[:, None] == np.arange(65)] = 0.0  # never by itself
+            assert np.array_equal(ow, in_order(1 - q))
+            np.testing.assert_allclose(ow, np.prod(1 - q, axis=-1), rtol=1e-14)
             full = ow
         else:
             np.testing.assert_allclose(mw.hidden, hidden, rtol=1e-12, atol=1e-15)
