@@ -75,9 +75,11 @@ says; leaving such edges out splits a crowd's graph into the clusters that reall
 (benchmarks/bench_gating.py: no MOT17 metric moves).
 
 Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
-pluggable miss term. The loops over components, pairs and cells (the `_`-prefixed functions at
-the end of this module) are compiled (`occtrack.jit`): a frame is too small for numpy's
-per-call overhead to pay off.
+pluggable miss term. The loops over components, pairs and cells and the bookkeeping between
+them (the `_`-prefixed functions at the end of this module) are compiled (`occtrack.jit`): a
+frame is too small for numpy's per-call overhead to pay off. Each reproduces the numpy
+expression it replaced to the last bit (tests/test_kernels.py, tests/test_update_kernels.py);
+where numpy and the C library round differently (a power), numpy computes it.
 """
 
 from __future__ import annotations
