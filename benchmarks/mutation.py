@@ -63,7 +63,7 @@ GROUPS = {
     "gospa": (["src/occtrack/metrics/gospa.py", "src/occtrack/spatial.py"],
               ["test_gospa.py", "test_gospa_exact.py", "test_eval.py", "test_scaling.py"]),
     "highway": (["src/occtrack/filters/particle_tomb.py", "src/occtrack/models/highway_sensor.py"],
-                ["test_highway_tracker.py", "test_highway_sim.py"]),
+                ["test_highway_kernels.py", "test_highway_tracker.py", "test_highway_sim.py"]),
     "calibration": (["src/occtrack/models/calibration.py"], ["test_calibrate.py"]),
 }
 SLOW = {"highway", "calibration"}  # hours on one core: only when asked for

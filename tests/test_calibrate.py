@@ -19,6 +19,7 @@ headline quantity inside its interval, and nearly every bin.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -34,10 +35,13 @@ from occtrack.models.calibration import (
     HEIGHT_BINS,
     SCORE_BINS,
     VISIBILITY_BINS,
+    Estimate,
     Labelled,
     _bins,
     calibrate,
     poisson_power_fit,
+    report_lines,
+    to_toml,
 )
 from occtrack.scenarios.detector import DetectorConfig, simulate_detections
 
@@ -222,3 +226,152 @@ def test_tracked_detectability_leaves_out_people_lost_long_ago():
     assert cal.detection_overall.value == pytest.approx(0.5)
     assert cal.detection_tracked.value == pytest.approx(59 / 79)
     assert cal.settings(occlusion=True)["detectability"] == pytest.approx(0.5)
+
+
+# -- exact values: the report of a fixed scene, the matching, the settings -----------------------
+
+REPORT = """\
+sequences: A, B; 240 frames, 2520 pedestrian boxes, 1210 detections: 940 hits, 165 false, 105 on distractors (set aside); match IoU >= 0.5
+
+detection probability, all pedestrians: 0.373 [0.280, 0.476]
+  visible (visibility >= 0.75): 0.452 [0.320, 0.592]
+  tracked (detected within the last 0.67 s): 0.626 [0.544, 0.701]
+  memory per frame P(hit|hit) - P(hit|miss), visible: 0.883 [0.823, 0.930]; half-second ratio 0.795 [0.610, 0.924]
+  by visibility:
+    0-0.25      0.000 [0.000, 0.020]      n     310  effective      186
+    0.25-0.5    0.074 [0.009, 0.407]      n     215  effective        8
+    0.5-0.75    0.509 [0.214, 0.798]      n     385  effective        7
+    0.75-1      0.452 [0.320, 0.592]      n    1610  effective       48
+  by box height (px):
+    0-50        0.058 [0.002, 0.621]      n     240  effective        3
+    50-100      0.402 [0.188, 0.662]      n     840  effective       13
+    100-200     0.346 [0.191, 0.543]      n     840  effective       25
+    200-400     0.495 [0.379, 0.612]      n     600  effective       67
+    >= 400      -                         n       0  effective        0
+  by visibility (rows) and height (columns), value (n):
+                            0-50          50-100         100-200         200-400          >= 400
+    0-0.25                     -     0.000 (120)     0.000 (145)      0.000 (45)               -
+    0.25-0.5          0.000 (70)      0.000 (20)      0.000 (75)      0.320 (50)               -
+    0.5-0.75          0.140 (50)     0.624 (170)      0.653 (95)      0.300 (70)               -
+    0.75-1           0.058 (120)     0.438 (530)     0.436 (525)     0.598 (435)               -
+
+false detections per frame: 0.688 [0.401, 1.100]
+  by score (false per frame; hits in the bin):
+    0-0.5       0.0000 [0.0000, 0.0239]       n      0  hits       0
+    0.5-0.9     0.4625 [0.3277, 0.6342]       n    111  hits     678
+    0.9-0.99    0.0583 [0.0115, 0.1739]       n     14  hits     204
+    0.99-0.999  0.1667 [0.0352, 0.4822]       n     40  hits      58
+    0.999-1     0.0000 [0.0000, 0.0239]       n      0  hits       0
+  tracker's clutter term: clutter_rate 0.1935 [0.0188, 0.2886] and clutter_score_power 0.00 [0.00, 4.35]
+  (false boxes spread over 3.55 in log width x log height: the 1st-99th percentile ranges of the detections)
+
+box-edge noise, matched people with visibility >= 0.5, edges off the border: std in true box heights (own axis size), bias, robust std
+    left    std 0.020 [0.020, 0.021]    (0.050 [0.048, 0.051])  bias 0.000 [-0.001, 0.001]     robust 0.020   n 924
+    top     std 0.040 [0.037, 0.042]    (0.040 [0.037, 0.042])  bias 0.001 [-0.000, 0.003]     robust 0.041   n 924
+    right   std 0.021 [0.020, 0.022]    (0.051 [0.048, 0.053])  bias 0.001 [-0.001, 0.003]     robust 0.021   n 924
+    bottom  std 0.040 [0.038, 0.041]    (0.040 [0.038, 0.041])  bias -0.001 [-0.003, 0.001]    robust 0.040   n 924
+  pooled about each edge's bias: edge_noise 0.0316 [0.0309, 0.0321]
+note: B: no visibility column; every person counted as visible
+"""  # noqa: E501
+
+
+@pytest.fixture(scope="module")
+def two_sequences():
+    """Sequence A has classes (person 3 a distractor, person 5 not to be considered, person 8
+    of class 3, neither) at 30 fps; B is the same without class or visibility columns at 25
+    fps."""
+    gt = scene(7, frames=120, cols=6, rows=2)
+    det = simulate_detections(gt, 7, CONFIG, image_size=SIZE, num_frames=120)
+    cls, score = gt.cls.copy(), gt.score.copy()
+    cls[gt.id == 3], score[gt.id == 5], cls[gt.id == 8] = 7, 0, 3
+    a = MotTable(gt.frame, gt.id, gt.box, score, cls, gt.visibility)
+    m = len(gt.frame)
+    b = MotTable(gt.frame, gt.id, gt.box, np.ones(m), np.full(m, -1), np.full(m, -1.0))
+    return calibrate([Labelled("A", a, det, SIZE, 30.0, 120),
+                      Labelled("B", b, det, SIZE, 25.0, 120)], seed=3)
+
+
+def _numbers(cal):
+    """Every number of a calibration: (values and bounds, counts and effective counts)."""
+    small, counts = [], []
+
+    def add(x):
+        if isinstance(x, Estimate):
+            small.extend([x.value, x.low, x.high])
+            counts.extend([float(x.n), x.effective])
+        else:
+            small.append(float(x))
+
+    for f in dataclasses.fields(cal):
+        v = getattr(cal, f.name)
+        if f.name in ("sequences", "notes"):
+            continue
+        if isinstance(v, dict):
+            for x in v.values():
+                add(x)
+        elif isinstance(v, list):
+            for row in v:
+                for x in row:
+                    add(x)
+        elif isinstance(v, Estimate):
+            add(v)
+    return np.array(small), np.array(counts)
+
+
+def test_report_of_a_fixed_scene_is_exact(two_sequences):
+    """The printed report (3-4 digits) and a fingerprint of every number at full precision,
+    as this code computes them on a fixed scene and seed; any change to the estimates, their
+    intervals or the text shows here. The counts are those of the scene: 12 people x 120
+    frames x 2 sequences = 2880 rows, 2520 of them pedestrians (person 5 is not considered in
+    A, persons 3 and 8 are not pedestrians there)."""
+    cal = two_sequences
+    assert "\n".join(report_lines(cal)) + "\n" == REPORT
+    assert (cal.frames, cal.targets, cal.hits + cal.false + cal.set_aside) == (240, 2520,
+                                                                              cal.detections)
+    for values, (size, finite, fingerprint) in zip(
+            _numbers(cal), ((202, 183, 22112.86011225939), (110, 93, 211008.27180301852)),
+            strict=True):
+        ok = np.isfinite(values)
+        assert (len(values), int(ok.sum())) == (size, finite)
+        weights = np.sqrt(np.arange(1, size + 1))[ok]
+        assert float(np.sum(values[ok] * weights)) == pytest.approx(fingerprint, rel=1e-11)
+
+
+def test_toml_holds_the_settings_their_intervals_and_the_report(two_sequences):
+    cal = two_sequences
+    text = to_toml(cal, occlusion=False, command="occtrack calibrate x")
+    head, tail = text.split("# The measurements:\n")
+    assert head == TOML_HEAD
+    assert tail == "".join(f"#   {line}\n" if line else "#\n" for line in report_lines(cal))
+    settings = tomllib.loads(text)
+    want = cal.settings(occlusion=False)
+    assert list(settings) == list(want)  # four digits
+    assert all(settings[k] == float(f"{want[k]:.4g}") for k in want)
+    occluded = to_toml(cal)
+    assert "# P_D of visible people (visibility >= 0.75), for occlusion models; estimate " \
+           "0.4522, 95 % interval [0.3197, 0.5918]\ndetectability = 0.4522\n" in occluded
+    assert occluded.startswith("# occtrack detector calibration (occtrack calibrate)\n# Only")
+
+
+TOML_HEAD = """\
+# occtrack detector calibration (occtrack calibrate)
+# occtrack calibrate x
+# Only TrackerConfig fields below; load with: occtrack track --config FILE.
+# Each setting: its 95 % interval and meaning in the comment above it.
+
+# P_D of tracked pedestrians (detected within the last 0.67 s), for occlusion = none; estimate 0.6258, 95 % interval [0.5437, 0.7012]
+detectability = 0.6258
+
+# half-second ratio of the detectability chain; estimate 0.7954, 95 % interval [0.6099, 0.9236]
+detectability_ratio = 0.7954
+
+# kappa W H w h at score 1: false boxes per frame per unit of log w x log h, over the hits' score density; estimate 0.1935, 95 % interval [0.01877, 0.2886]
+clutter_rate = 0.1935
+
+# clutter term ~ score ** -power; estimate 0.0, 95 % interval [0.0, 4.35]
+clutter_score_power = 0.0
+
+# std of a box edge, in box heights; estimate 0.03158, 95 % interval [0.03095, 0.03211]
+edge_noise = 0.03158
+
+"""  # noqa: E501
