@@ -30,15 +30,19 @@ from scipy.stats import norm
 from occtrack._compat import tomllib
 from occtrack.cli import main
 from occtrack.config import TrackerConfig
+from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
 from occtrack.models.calibration import (
+    EDGES,
     HEIGHT_BINS,
     SCORE_BINS,
     VISIBILITY_BINS,
+    Calibration,
     Estimate,
     Labelled,
     _bins,
     calibrate,
+    match,
     poisson_power_fit,
     report_lines,
     to_toml,
@@ -375,3 +379,121 @@ clutter_score_power = 0.0
 edge_noise = 0.03158
 
 """  # noqa: E501
+
+
+def _table(frame, ids, boxes, score=None, cls=None, vis=None) -> MotTable:
+    n = len(frame)
+    return MotTable(np.asarray(frame), np.asarray(ids), np.asarray(boxes, dtype=float),
+                    np.ones(n) if score is None else np.asarray(score, dtype=float),
+                    np.full(n, -1) if cls is None else np.asarray(cls),
+                    np.full(n, -1.0) if vis is None else np.asarray(vis, dtype=float))
+
+
+def test_match_by_class_consider_flag_and_iou():
+    """Frame 1: a pedestrian, a pedestrian not to be considered, a distractor (7), a car (3)
+    and a box of class 0 (neither); a detection on each, one false. Frame 2: one pedestrian,
+    one detection at IoU exactly 0.5 (matches). Frame 3: one pedestrian, a detection at IoU
+    0.49 (false). Frame 5 (after the last ground truth): a false detection."""
+    box = [[0, 0, 10, 20], [100, 0, 10, 20], [200, 0, 10, 20], [300, 0, 10, 20],
+           [400, 0, 10, 20]]
+    gt = _table([1, 1, 1, 1, 1, 2, 3], [1, 2, 3, 4, 5, 1, 1],
+                box + [[0, 0, 10, 20], [0, 0, 10, 20]], score=[1, 0, 1, 1, 1, 1, 1],
+                cls=[1, 1, 7, 3, 0, 1, 1])
+    # IoU of [0, 0, 10, 20] with [0, 0, 10, 10] is 0.5; with [0, 0, 10, 9.8] it is 0.49
+    det = _table([1, 1, 1, 1, 1, 1, 2, 3, 5],
+                 [-1] * 9, box + [[600, 0, 10, 20], [0, 0, 10, 10], [0, 0, 10, 9.8],
+                                  [0, 0, 10, 20]])
+    m = match(gt, det, 5)
+    assert m.target.dtype == bool and m.gt_match.dtype == np.int64
+    assert m.det_kind.dtype == np.int64
+    assert m.target.tolist() == [True, False, False, False, False, True, True]
+    assert m.gt_match.tolist() == [0, -1, -1, -1, -1, 6, -1]
+    assert m.det_kind.tolist() == [1, -1, -1, 0, 0, 0, 1, 0, 0]
+
+
+def test_match_without_a_class_column_takes_every_row_as_a_pedestrian():
+    gt = _table([1, 2, 2], [1, 1, 2], [[0, 0, 10, 20], [0, 0, 10, 20], [50, 0, 10, 20]])
+    det = _table([2, 2, 3], [-1] * 3, [[50, 0, 10, 20], [1, 0, 10, 20], [0, 0, 10, 20]])
+    m = match(gt, det, 3)
+    assert m.target.tolist() == [True, True, True]
+    assert m.gt_match.tolist() == [-1, 1, 0]
+    assert m.det_kind.tolist() == [1, 1, 0]
+    # one row, with a class: a distractor is not a target
+    one = match(_table([1], [1], [[0, 0, 10, 20]], cls=[7]), _table([1], [-1], [[0, 0, 10, 20]]), 1)
+    assert one.target.tolist() == [False] and one.det_kind.tolist() == [-1]
+    # no rows at all
+    empty = match(_table([], [], np.zeros((0, 4))), det, 3)
+    assert empty.target.shape == (0,) and empty.det_kind.tolist() == [0, 0, 0]
+
+
+def _estimate(value, low=None, high=None):
+    return Estimate(value, value if low is None else low, value if high is None else high, 10,
+                    10.0)
+
+
+def _calibration(**changes) -> Calibration:
+    base = dict(sequences=["S"], frames=10, targets=5, detections=4, hits=3, false=1,
+                set_aside=0, detection_overall=_estimate(0.6), detectability=_estimate(0.8),
+                detection_tracked=_estimate(0.7), horizon=0.5,
+                detection_memory=_estimate(0.2), detectability_ratio=_estimate(0.3),
+                by_visibility=[], by_height=[], joint=[], false_per_frame=_estimate(0.1),
+                by_score=[], size_area=1.0, clutter_rate=_estimate(0.05),
+                clutter_score_power=_estimate(2.0),
+                edge_bias=dict.fromkeys(EDGES, _estimate(0.0)),
+                edge_std=dict.fromkeys(EDGES, _estimate(0.04)),
+                edge_std_own=dict.fromkeys(EDGES, _estimate(0.05)),
+                edge_robust=dict.fromkeys(EDGES, 0.04), edge_noise=_estimate(0.04))
+    base.update(changes)
+    return Calibration(**base)
+
+
+def test_settings_clip_and_leave_out_what_was_not_measured():
+    cal = _calibration()
+    assert cal.settings() == cal.settings(occlusion=True) == {
+        "detectability": 0.8, "detectability_ratio": 0.3, "clutter_rate": 0.05,
+        "clutter_score_power": 2.0, "edge_noise": 0.04}
+    assert cal.settings(occlusion=False)["detectability"] == 0.7
+    nan = Estimate(float("nan"), float("nan"), float("nan"))
+    cal = _calibration(detectability=_estimate(1.0), detectability_ratio=_estimate(1.5),
+                       clutter_score_power=_estimate(-0.4), edge_noise=_estimate(0.0))
+    assert cal.settings() == {"detectability": 0.999, "detectability_ratio": 1.0,
+                              "clutter_rate": 0.05, "clutter_score_power": 0.0}
+    cal = _calibration(detectability=_estimate(0.0), detectability_ratio=_estimate(-0.2),
+                       clutter_rate=_estimate(0.0), edge_noise=nan)
+    assert cal.settings() == {"detectability": 0.01, "detectability_ratio": 0.0}
+    cal = _calibration(detectability=nan, detectability_ratio=nan, clutter_rate=nan,
+                       clutter_score_power=_estimate(0.3))
+    assert cal.settings() == {"edge_noise": 0.04}
+    assert _calibration(clutter_score_power=_estimate(0.3)).settings()[
+        "clutter_score_power"] == 0.3
+
+
+def test_toml_says_what_it_clipped_and_left_out():
+    nan = Estimate(float("nan"), float("nan"), float("nan"))
+    cal = _calibration(detectability=_estimate(1.0, 0.98, 1.0), detectability_ratio=nan,
+                       clutter_rate=_estimate(0.0), edge_noise=_estimate(0.04, 0.0, 0.0625))
+    text = to_toml(cal)
+    assert ("# P_D of visible people (visibility >= 0.75), for occlusion models; estimate 1, "
+            "95 % interval [0.98, 1]\n# (clipped to [0.01, 0.999]: a certain detection leaves "
+            "no room for a miss)\ndetectability = 0.999\n\n") in text
+    assert ("# std of a box edge, in box heights; estimate 0.04, 95 % interval [0.0, 0.0625]"
+            "\nedge_noise = 0.04\n\n# not set (no estimate in these data; the defaults hold): "
+            "detectability_ratio, clutter_rate, clutter_score_power\n\n") in text
+    assert "# occtrack calibrate" not in text.split("\n")[1]
+    assert "# (clipped" not in to_toml(_calibration())
+
+
+def test_estimate_covers_its_bounds_and_prints_three_digits():
+    e = Estimate(0.5, 0.25, 0.75)
+    assert e.covers(0.25) and e.covers(0.75) and not e.covers(0.2499999) and not e.covers(0.7500001)
+    assert e.text() == "0.500 [0.250, 0.750]" and e.text(1) == "0.5 [0.2, 0.8]"
+    assert Estimate(float("nan"), 0.0, 1.0).text() == "-"
+
+
+def test_calibrate_names_what_is_missing():
+    with pytest.raises(OcctrackError, match="at least one pair of ground truth and detections"):
+        calibrate([])
+    gt = _table([1], [1], [[0, 0, 10, 20]], cls=[7], vis=[1.0])
+    with pytest.raises(OcctrackError, match=r"no pedestrian to calibrate against \(class 1 "
+                                            r"with a consider flag of 1\)"):
+        calibrate([Labelled("X", gt, gt, SIZE, 30.0, 1)])
