@@ -295,3 +295,42 @@ def test_a_handler_may_return_integer_terms():
     a, b = HighwayTracker(SMALL, IntegerTerms(SMALL), 12), HighwayTracker(SMALL,
                                                                          RoundedTerms(SMALL), 12)
     assert _digest([a.step(s) for s in scans]) == _digest([b.step(s) for s in scans])
+
+
+def test_full_track_table_breaks_ties_by_age_then_measurement_order():
+    """Existences tie often (they are clipped at 1): among equals, the tracks already held
+    keep their slots before newborns, and newborns go in measurement order, so which tracks
+    survive does not depend on a sort's whim. Checked against sorting by (-r, position)."""
+    config = replace(SMALL, max_tracks=20, kernel_bandwidth=0.0)  # copies: who is who
+    rng = np.random.default_rng(13)
+    for _ in range(20):
+        tracker = HighwayTracker(config, seed=13)
+        old = rng.choice([1.0, 0.9, 0.5], 18)
+        new = rng.choice([1.0, 0.9, 0.5], 6)
+        particles, weights = _cloud(rng, 24, width=4)
+        tracker._start_tracks(particles[:18], weights[:18], old, np.zeros(18, np.int64))
+        tracker._start_tracks(particles[18:], weights[18:], new, np.ones(6, np.int64))
+        pool = np.r_[old, new]
+        keep = sorted(sorted(range(24), key=lambda i: (-pool[i], i))[:20])
+        held = [int(np.flatnonzero((particles[:, :, 0] == x[0, 0]).any(axis=1))[0])
+                for x in tracker.x[:20]]
+        assert held == keep
+        assert np.array_equal(tracker.r[:20], pool[keep])
+
+
+def test_thresholds_keep_an_existence_equal_to_the_pruning_one_and_report_above():
+    tracker = HighwayTracker(SMALL, seed=14)
+    particles, weights = _cloud(np.random.default_rng(14), 3, width=4)
+    p, report = SMALL.prune_threshold, SMALL.report_threshold
+    tracker._start_tracks(particles, weights, np.array([p, np.nextafter(p, 0), report]),
+                          np.zeros(3, np.int64))
+    assert len(tracker.estimates()) == 0  # r == report_threshold is not reported
+    tracker._prune()
+    assert tracker.label[:tracker.n].tolist() == [0, 2]
+
+
+def test_births_use_a_sobol_set_scrambled_by_the_seed():
+    a, b = HighwayTracker(SMALL, seed=0)._sobol, HighwayTracker(SMALL, seed=1)._sobol
+    assert a.shape == (SMALL.birth_particles, 3)
+    assert not np.array_equal(a, b)
+    assert np.all((a > 0) & (a < 1))  # an unscrambled set starts at the origin
