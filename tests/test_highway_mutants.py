@@ -267,6 +267,10 @@ def test_lbp_runs_at_most_the_configured_iterations():
             counts.append(tracker.last_iterations)
         assert all(isinstance(k, int) for k in counts)
         assert max(counts) == limit
+        # a step without measurements runs no LBP and leaves the count of the last one
+        assert counts[-1] > 0 and tracker.n > 0
+        tracker.step(Scan.empty())
+        assert tracker.last_iterations == counts[-1]
     free = HighwayTracker(SMALL, seed=11)
     counts = []
     for scan in _scans(40, 11):
