@@ -497,3 +497,31 @@ def test_calibrate_names_what_is_missing():
     with pytest.raises(OcctrackError, match=r"no pedestrian to calibrate against \(class 1 "
                                             r"with a consider flag of 1\)"):
         calibrate([Labelled("X", gt, gt, SIZE, 30.0, 1)])
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_one_person_always_detected_gives_no_interval_and_sets_only_the_detectability():
+    """One person (one cluster, one block of frames): nothing to resample, so every interval
+    is as wide as it can be; detected in every frame, exactly where the truth is: no memory
+    (never a miss), no clutter, no edge noise, a size area at its floor of 0.1 x 0.1."""
+    box = np.tile([[100.0, 100.0, 40.0, 100.0]], (30, 1))
+    gt = _table(np.arange(1, 31), np.ones(30, int), box, cls=np.ones(30, int), vis=np.ones(30))
+    cal = calibrate([Labelled("ONE", gt, gt, SIZE, 30.0, 30)])
+    assert (cal.targets, cal.hits, cal.false, cal.set_aside) == (30, 30, 0, 0)
+    # tracked: every frame but the first follows a detection
+    for e, n in ((cal.detection_overall, 30), (cal.detectability, 30),
+                 (cal.detection_tracked, 29)):
+        assert (e.value, e.low, e.high, e.n) == (1.0, 0.0, 1.0, n)
+    assert math.isnan(cal.detection_memory.value) and cal.detection_memory.n == 29
+    assert math.isnan(cal.detectability_ratio.value)
+    assert (cal.false_per_frame.value, cal.false_per_frame.low) == (0.0, 0.0)
+    assert cal.false_per_frame.high == math.inf
+    assert cal.clutter_rate.value == 0.0 and math.isnan(cal.clutter_score_power.value)
+    assert cal.size_area == pytest.approx(0.01, rel=1e-12)
+    assert cal.edge_noise.value == 0.0 and cal.edge_noise.n == 120
+    assert all(cal.edge_robust[name] == 0.0 for name in EDGES)
+    assert cal.settings() == {"detectability": 0.999}
+    lines = report_lines(cal)
+    assert lines[5] == ("  memory per frame P(hit|hit) - P(hit|miss), visible: -; half-second "
+                        "ratio -")
+    assert lines[-1] == "  pooled about each edge's bias: edge_noise 0.0000 [nan, nan]"
