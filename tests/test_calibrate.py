@@ -33,14 +33,23 @@ from occtrack.config import TrackerConfig
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
 from occtrack.models.calibration import (
+    BOOTSTRAP,
     EDGES,
     HEIGHT_BINS,
     SCORE_BINS,
     VISIBILITY_BINS,
+    Z95,
     Calibration,
     Estimate,
     Labelled,
     _bins,
+    _bootstrap_weights,
+    _inflation,
+    _percentile,
+    _recently_detected,
+    _score_centres,
+    _size_area,
+    _wilson,
     calibrate,
     match,
     poisson_power_fit,
@@ -390,14 +399,15 @@ def _table(frame, ids, boxes, score=None, cls=None, vis=None) -> MotTable:
 
 
 def test_match_by_class_consider_flag_and_iou():
-    """Frame 1: a pedestrian, a pedestrian not to be considered, a distractor (7), a car (3)
-    and a box of class 0 (neither); a detection on each, one false. Frame 2: one pedestrian,
-    one detection at IoU exactly 0.5 (matches). Frame 3: one pedestrian, a detection at IoU
-    0.49 (false). Frame 5 (after the last ground truth): a false detection."""
+    """Frame 1: a pedestrian, a pedestrian not to be considered, a distractor (7), a car (3,
+    not considered, as in MOT17) and a box of class 0 (neither); a detection on each, one
+    false. Frame 2: one pedestrian, one detection at IoU exactly 0.5 (matches). Frame 3: one
+    pedestrian, a detection at IoU 0.49 (false). Frame 5 (after the last ground truth): a
+    false detection."""
     box = [[0, 0, 10, 20], [100, 0, 10, 20], [200, 0, 10, 20], [300, 0, 10, 20],
            [400, 0, 10, 20]]
     gt = _table([1, 1, 1, 1, 1, 2, 3], [1, 2, 3, 4, 5, 1, 1],
-                box + [[0, 0, 10, 20], [0, 0, 10, 20]], score=[1, 0, 1, 1, 1, 1, 1],
+                box + [[0, 0, 10, 20], [0, 0, 10, 20]], score=[1, 0, 1, 0, 1, 1, 1],
                 cls=[1, 1, 7, 3, 0, 1, 1])
     # IoU of [0, 0, 10, 20] with [0, 0, 10, 10] is 0.5; with [0, 0, 10, 9.8] it is 0.49
     det = _table([1, 1, 1, 1, 1, 1, 2, 3, 5],
@@ -491,12 +501,15 @@ def test_estimate_covers_its_bounds_and_prints_three_digits():
 
 
 def test_calibrate_names_what_is_missing():
-    with pytest.raises(OcctrackError, match="at least one pair of ground truth and detections"):
+    with pytest.raises(OcctrackError) as err:
         calibrate([])
+    assert str(err.value) == ("calibration needs at least one pair of ground truth and "
+                              "detections")
     gt = _table([1], [1], [[0, 0, 10, 20]], cls=[7], vis=[1.0])
-    with pytest.raises(OcctrackError, match=r"no pedestrian to calibrate against \(class 1 "
-                                            r"with a consider flag of 1\)"):
+    with pytest.raises(OcctrackError) as err:
         calibrate([Labelled("X", gt, gt, SIZE, 30.0, 1)])
+    assert str(err.value) == ("the ground truth holds no pedestrian to calibrate against "
+                              "(class 1 with a consider flag of 1)")
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")
@@ -525,3 +538,182 @@ def test_one_person_always_detected_gives_no_interval_and_sets_only_the_detectab
     assert lines[5] == ("  memory per frame P(hit|hit) - P(hit|miss), visible: -; half-second "
                         "ratio -")
     assert lines[-1] == "  pooled about each edge's bias: edge_noise 0.0000 [nan, nan]"
+
+
+def _two_people(frames, box1, box2, hit1, hit2, err1=None):
+    """Two people standing still in full view; person 1's detections have right-edge errors
+    `err1` (px), person 2's are exact."""
+    f = np.arange(1, frames + 1)
+    gt = _table(np.r_[f, f], np.r_[np.ones(frames, int), np.full(frames, 2)],
+                np.r_[np.tile(box1, (frames, 1)), np.tile(box2, (frames, 1))],
+                cls=np.ones(2 * frames, int), vis=np.ones(2 * frames))
+    d1 = np.tile(np.asarray(box1, float), (frames, 1))
+    if err1 is not None:
+        d1[:, 2] += err1
+    boxes = np.r_[d1[hit1], np.tile(box2, (int(hit2.sum()), 1))]
+    det = _table(np.r_[f[hit1], f[hit2]], [-1] * len(boxes), boxes,
+                 score=np.full(len(boxes), 0.9))
+    return calibrate([Labelled("TWO", gt, det, SIZE, 30.0, frames)], seed=1)
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_edges_with_fewer_than_two_rows_have_no_estimate():
+    """Person 1 touches the left, top and bottom borders (only its right edge counts) and is
+    detected twice, with right-edge errors +4 and -6 px; person 2 touches the right border and
+    is detected once. So the right edge has two rows: bias -1 px, std 10 / sqrt(2) px (over
+    the box height 1080, or the width 200); the others one row each: no estimate."""
+    frames = 5
+    hit1, hit2 = np.arange(frames) < 2, np.arange(frames) == 0
+    cal = _two_people(frames, [0.0, 0.0, 200.0, 1080.0], [1800.0, 400.0, 120.0, 200.0],
+                      hit1, hit2, err1=np.array([4.0, -6.0, 0.0, 0.0, 0.0]))
+    right = cal.edge_std["right"]
+    assert right.n == 2 and right.value == pytest.approx(10 / math.sqrt(2) / 1080, rel=1e-12)
+    assert cal.edge_std_own["right"].value == pytest.approx(10 / math.sqrt(2) / 200, rel=1e-12)
+    assert cal.edge_bias["right"].value == pytest.approx(-1 / 1080, rel=1e-12)
+    assert cal.edge_robust["right"] == pytest.approx(1.4826 * 5 / 1080, rel=1e-12)
+    for name in ("left", "top", "bottom"):
+        for table in (cal.edge_std, cal.edge_std_own, cal.edge_bias):
+            e = table[name]
+            assert e.n == 1 and all(math.isnan(v) for v in (e.value, e.low, e.high)), name
+        assert math.isnan(cal.edge_robust[name])
+    # pooled about the bias: the two right-edge rows only
+    assert cal.edge_noise.n == 2
+    assert cal.edge_noise.value == pytest.approx(10 / math.sqrt(2) / 1080, rel=1e-12)
+    assert cal.edge_noise.low == 0.0
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_memory_of_detection_by_hand_with_two_people():
+    """Person 1 is detected every other frame, person 2 in runs of 10 frames, over 40 frames.
+    After a hit: 20 + 20 pairs, 0 + 18 hits; after a miss: 19 + 19 pairs, 19 + 1 hits. So
+    lambda = 18/40 - 20/38 = -29/380 < 0: no memory, half-second ratio 1. Two people are too few
+    for an interval: it spans what lambda and the ratio can be."""
+    frames = 40
+    f = np.arange(1, frames + 1)
+    cal = _two_people(frames, [100.0, 100.0, 80.0, 200.0], [900.0, 400.0, 80.0, 200.0],
+                      f % 2 == 1, (f - 1) // 10 % 2 == 0)
+    memory, ratio = cal.detection_memory, cal.detectability_ratio
+    assert memory.value == pytest.approx(-29 / 380, rel=1e-12) and memory.n == 78
+    assert (memory.low, memory.high) == (-1.0, 1.0)
+    assert ratio.value == 1.0 and ratio.high == 1.0 and ratio.n == 78
+    assert 0.0 < ratio.low < 1.0
+    assert cal.settings()["detectability_ratio"] == 1.0
+
+
+def test_interval_helpers_on_hand_worked_input():
+    # Wilson: no effective rows, no information; p = 1 reaches 1
+    assert _wilson(0.5, 0.0) == (0.0, 1.0) and _wilson(0.5, -1.0) == (0.0, 1.0)
+    z2 = Z95 * Z95
+    low = (1 + z2 / 6 - Z95 * math.sqrt(z2 / 36)) / (1 + z2 / 3)
+    assert _wilson(1.0, 3.0) == (pytest.approx(low, rel=1e-12), 1.0)
+    # percentile interval: 2.5 % and 97.5 % of 0..9 are 0.225 and 8.775; fewer than 10
+    # finite draws give none; clusters widen it about the estimate, bounds cut it
+    e = _percentile(4.5, np.r_[np.arange(10.0), np.nan, np.inf])
+    assert (e.value, e.n) == (4.5, 0)
+    assert (e.low, e.high) == (pytest.approx(0.225, rel=1e-12), pytest.approx(8.775, rel=1e-12))
+    none = _percentile(4.5, np.r_[np.arange(9.0), np.nan], n=3)
+    assert none.value == 4.5 and none.n == 3 and math.isnan(none.low) and math.isnan(none.high)
+    assert math.isnan(_percentile(float("nan"), np.arange(20.0)).low)
+    grow = _inflation(3)
+    wide = _percentile(4.5, np.arange(10.0), 7, 3)
+    assert wide.low == pytest.approx(4.5 - grow * 4.275, rel=1e-12) and wide.n == 7
+    assert (_percentile(4.5, np.arange(10.0), 7, 3, (1.0, 8.0)).low,
+            _percentile(4.5, np.arange(10.0), 7, 3, (1.0, 8.0)).high) == (1.0, 8.0)
+    assert _inflation(1) == math.inf and _inflation(0) == math.inf
+    assert _inflation(2) == pytest.approx(math.sqrt(2) * 12.706204736174698 / Z95, rel=1e-9)
+    assert _bootstrap_weights(0, np.random.default_rng(0)).shape == (BOOTSTRAP, 0)
+    counts = _bootstrap_weights(3, np.random.default_rng(0))
+    assert counts.shape == (BOOTSTRAP, 3) and np.all(counts.sum(axis=1) == 3)
+
+
+def test_binning_sizes_and_score_centres():
+    # below the first edge: the first bin; at or above the last: the last
+    assert _bins(np.array([-3.0, 0.0, 0.2, 0.5, 0.999, 1.0, 5.0]), SCORE_BINS).tolist() == [
+        0, 0, 0, 1, 4, 4, 4]
+    # log-size ranges: the 1st-99th percentile span of log w and of log h (at least 0.1 each);
+    # boxes without a positive width and height are left out; under two boxes: 1
+    e = math.e
+    assert _size_area(np.array([1.0, e]), np.array([1.0, e ** 2])) == pytest.approx(
+        0.98 * 1.96, rel=1e-12)
+    assert _size_area(np.array([0.5, 0.5 * e, 0.0, 3.0]), np.array([1.0, e, 4.0, 0.0])) == \
+        pytest.approx(0.98 * 0.98, rel=1e-12)
+    assert _size_area(np.array([5.0, 0.0]), np.array([5.0, 5.0])) == 1.0
+    assert _size_area(np.array([5.0, 5.0, 5.0]), np.array([5.0, 5.0, 5.0])) == \
+        pytest.approx(0.01, rel=1e-12)
+    # the geometric mean of the scores of hits and false detections in a bin (not of those
+    # set aside), the bin's midpoint where it has none
+    got = _score_centres(np.array([1, 1, 1, 2]), np.array([0, 1, -1, 1]),
+                         np.array([0.6, 0.8, 0.7, 0.95]))
+    assert got.tolist() == pytest.approx([0.25, math.sqrt(0.48), 0.95, 0.9945, 0.9995],
+                                         rel=1e-12)
+    assert _recently_detected(np.zeros(0, int), np.zeros(0, int), np.zeros(0, bool), 3).dtype \
+        == bool
+
+
+def test_thresholds_at_equality_and_missing_visibility():
+    """Visibility exactly 0.75 is visible (its pairs count for the memory), exactly 0.5 counts
+    for the edge noise, exactly 0 is a visibility (not a missing column); an edge exactly
+    BORDER px from the image border is left out."""
+    frames, people = 40, 4
+    keep = np.tile((np.arange(frames) // 10 % 2 == 0)[:, None], (1, people))
+    gt, det = _static_people(people, frames, keep)
+    vis = np.select([gt.id == 1, gt.id == 2, gt.id == 3], [0.75, 0.5, 0.0], 1.0)
+    gt = MotTable(gt.frame, gt.id, gt.box, gt.score, gt.cls, vis)
+    cal = calibrate([Labelled("EQ", gt, det, SIZE, 30.0, frames)])
+    assert cal.notes == []
+    assert [e.n for _, _, e in cal.by_visibility] == [40, 0, 40, 80]
+    assert cal.detectability.n == 80 and cal.detectability.value == 0.5
+    assert cal.detection_memory.n == 2 * (frames - 1)
+    assert cal.edge_std["left"].n == 60  # people 1, 2 and 4, detected in 20 frames each
+    # a box edge exactly BORDER px from the border
+    at_border = MotTable(gt.frame, gt.id, np.c_[np.full(len(gt.frame), 2.0), gt.box[:, 1:]],
+                         gt.score, gt.cls, np.ones(len(gt.frame)))
+    det_border = at_border.select(np.flatnonzero(keep.ravel()))
+    det_border = MotTable(det_border.frame, np.full(len(det_border.frame), -1), det_border.box,
+                          np.full(len(det_border.frame), 0.9), np.full(len(det_border.frame), -1),
+                          np.full(len(det_border.frame), -1.0))
+    cal = calibrate([Labelled("B", at_border, det_border, SIZE, 30.0, frames)])
+    assert cal.edge_std["left"].n == 0 and cal.edge_std["top"].n == 80
+    right = at_border.box[:, 0] + at_border.box[:, 2]
+    shifted = MotTable(at_border.frame, at_border.id,
+                       np.c_[SIZE[0] - 1.0 - at_border.box[:, 2], at_border.box[:, 1:]],
+                       at_border.score, at_border.cls, at_border.visibility)
+    assert np.all(right > 0)
+    det_shift = shifted.select(np.flatnonzero(keep.ravel()))
+    det_shift = MotTable(det_shift.frame, np.full(len(det_shift.frame), -1), det_shift.box,
+                         np.full(len(det_shift.frame), 0.9), np.full(len(det_shift.frame), -1),
+                         np.full(len(det_shift.frame), -1.0))
+    cal = calibrate([Labelled("R", shifted, det_shift, SIZE, 30.0, frames)])
+    assert cal.edge_std["right"].n == 0 and cal.edge_std["left"].n == 80
+
+
+def test_at_one_frame_a_second_the_tracker_holds_a_person_for_one_frame():
+    """At 1 fps the horizon (0.67 s) rounds to 1 frame: of each run of 60 hits and 60 misses,
+    the 59 hits after a hit and the first miss are the tracked rows."""
+    frames, people = 480, 3
+    keep = np.tile((np.arange(frames) // 60 % 2 == 0)[:, None], (1, people))
+    gt, det = _static_people(people, frames, keep)
+    cal = calibrate([Labelled("SLOW", gt, det, SIZE, 1.0, frames)])
+    assert cal.detection_tracked.value == pytest.approx(59 / 60, rel=1e-12)
+
+
+def test_default_seed_is_zero_and_a_lone_false_detection_has_a_positive_lower_bound():
+    frames, people = 60, 3
+    keep = np.random.default_rng(2).random((frames, people)) < 0.8
+    gt, det = _static_people(people, frames, keep)
+    false = MotTable(np.array([7]), np.array([-1]), np.array([[1500.0, 500.0, 40.0, 90.0]]),
+                     np.array([0.7]), np.array([-1]), np.array([-1.0]))
+    det = MotTable(*(np.concatenate([getattr(det, k), getattr(false, k)]) for k in
+                     ("frame", "id", "box", "score", "cls", "visibility")))
+    labelled = [Labelled("F", gt, det, SIZE, 30.0, frames)]
+    rate_ = calibrate(labelled).false_per_frame
+    assert (rate_.n, rate_.value) == (1, 1 / 60) and 0 < rate_.low < rate_.value
+    gt = scene(5, frames=60, cols=4, rows=2)
+    det = simulate_detections(gt, 5, CONFIG, image_size=SIZE, num_frames=60)
+    labelled = [Labelled("S", gt, det, SIZE, 30.0, 60)]
+    a, b, c = calibrate(labelled), calibrate(labelled, seed=0), calibrate(labelled, seed=1)
+    same = [np.array_equal(x, y, equal_nan=True) for x, y in zip(_numbers(a), _numbers(b),
+                                                                strict=True)]
+    other = [np.array_equal(x, y, equal_nan=True) for x, y in zip(_numbers(a), _numbers(c),
+                                                                 strict=True)]
+    assert all(same) and not all(other)
