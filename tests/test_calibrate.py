@@ -676,7 +676,7 @@ def test_thresholds_at_equality_and_missing_visibility():
     assert cal.edge_std["left"].n == 0 and cal.edge_std["top"].n == 80
     right = at_border.box[:, 0] + at_border.box[:, 2]
     shifted = MotTable(at_border.frame, at_border.id,
-                       np.c_[SIZE[0] - 1.0 - at_border.box[:, 2], at_border.box[:, 1:]],
+                       np.c_[SIZE[0] - 2.0 - at_border.box[:, 2], at_border.box[:, 1:]],
                        at_border.score, at_border.cls, at_border.visibility)
     assert np.all(right > 0)
     det_shift = shifted.select(np.flatnonzero(keep.ravel()))
