@@ -154,6 +154,15 @@ def test_power_law_fit_is_exact_on_its_own_model():
     # no false detection at all: no clutter
     got_c, _ = poisson_power_fit(np.zeros(5), hits, frames, area, centres)
     assert got_c[0] == 0.0
+    # one false detection, in the bin with a single hit: all of it is there (share 1/21351)
+    one_hit = np.array([0.0, 1.0, 400.0, 800.0, 20000.0])
+    got_c, got_p = poisson_power_fit(np.array([0.0, 1.0, 0, 0, 0]), one_hit, frames, area,
+                                     centres)
+    assert got_c[0] > 0 and 0 <= got_p[0] < np.inf
+    # false counts in a bin without hits are left out of the fit
+    with_extra = poisson_power_fit(np.array([7.0, 1.0, 0, 0, 0]), one_hit, frames, area,
+                                   centres)
+    assert with_extra[0][0] == got_c[0] and with_extra[1][0] == got_p[0]
 
 
 def test_command_writes_a_tracker_config(tmp_path, capsys):
@@ -576,6 +585,12 @@ def test_edges_with_fewer_than_two_rows_have_no_estimate():
             e = table[name]
             assert e.n == 1 and all(math.isnan(v) for v in (e.value, e.low, e.high)), name
         assert math.isnan(cal.edge_robust[name])
+    # detected once each: no edge has two rows, nothing to pool
+    once = _two_people(frames, [0.0, 0.0, 200.0, 1080.0], [1800.0, 400.0, 120.0, 200.0],
+                       np.arange(frames) == 1, hit2)
+    assert once.edge_noise.n == 0 and math.isnan(once.edge_noise.value)
+    assert math.isnan(once.edge_noise.low) and math.isnan(once.edge_noise.high)
+    assert "edge_noise" not in once.settings()
     # pooled about the bias: the two right-edge rows only
     assert cal.edge_noise.n == 2
     assert cal.edge_noise.value == pytest.approx(10 / math.sqrt(2) / 1080, rel=1e-12)
@@ -646,8 +661,8 @@ def test_binning_sizes_and_score_centres():
                          np.array([0.6, 0.8, 0.7, 0.95]))
     assert got.tolist() == pytest.approx([0.25, math.sqrt(0.48), 0.95, 0.9945, 0.9995],
                                          rel=1e-12)
-    assert _recently_detected(np.zeros(0, int), np.zeros(0, int), np.zeros(0, bool), 3).dtype \
-        == bool
+    none = _recently_detected(np.zeros(0, int), np.zeros(0, int), np.zeros(0, bool), 3)
+    assert none.dtype == bool and none.shape == (0,)
 
 
 def test_thresholds_at_equality_and_missing_visibility():
