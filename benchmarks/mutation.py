@@ -13,8 +13,9 @@ modules and tests chosen here, by default each module group's own tests.
 Compiled loops are not mutated: mutmut leaves every decorated function alone (all but
 `staticmethod` / `classmethod`), so the `@njit` kernels (`occtrack.jit`) get no mutants and
 count in no score. What notices a fault in them is their comparison with plain numpy:
-tests/test_kernels.py for the filter's kernels, test_scaling.py for the box model's, and the
-hand-worked values of tests/test_housekeeping.py.
+tests/test_kernels.py for the filter's kernels, test_scaling.py for the box model's,
+test_highway_kernels.py for the highway's, and the hand-worked values of
+tests/test_housekeeping.py.
 
 Prints, per module: killed (a timeout counts: a fault that hangs the code is noticed),
 survived (no test failed, including functions no test calls), equivalent (survivors listed in
@@ -43,9 +44,11 @@ ROOT = Path(__file__).resolve().parents[1]
 EQUIVALENT = ROOT / "benchmarks" / "mutation_equivalent.md"
 
 # module group -> (files mutated, the tests that exercise them). The highway's particle filter,
-# sensor model and occlusion handlers and the detector calibration are groups of their own:
-# their tests run for tens of seconds (a highway run, a calibration on simulated sequences),
-# which makes them hours of mutation testing on one core.
+# sensor model and occlusion handlers and the detector calibration are groups of their own. The
+# highway's loops are compiled kernels (no mutants), so its group mutates the Python around
+# them, checked by the kernels' bit-for-bit comparison with numpy, the tracker's and
+# simulator's tests and tests/test_highway_mutants.py; numba's cache (written in the work
+# directory on the first run) keeps each mutant's tests to seconds.
 BOX_MODELS = [f"src/occtrack/models/{name}.py" for name in ("birth", "box", "markov", "motion")]
 # the box tracker's occlusion models (the highway's, extents.py and highway.py, go with it)
 BOX_OCCLUSION = ("base", "boxes", "box_geometry", "box_measurementwise", "box_objectwise")
@@ -66,10 +69,11 @@ GROUPS = {
               ["test_gospa.py", "test_gospa_exact.py", "test_eval.py", "test_scaling.py"]),
     "highway": (["src/occtrack/filters/particle_tomb.py", "src/occtrack/models/highway_sensor.py",
                  "src/occtrack/occlusion/extents.py", "src/occtrack/occlusion/highway.py"],
-                ["test_highway_tracker.py", "test_highway_sim.py", "test_highway_kernels.py"]),
+                ["test_highway_kernels.py", "test_highway_tracker.py", "test_highway_sim.py",
+                 "test_highway_mutants.py"]),
     "calibration": (["src/occtrack/models/calibration.py"], ["test_calibrate.py"]),
 }
-SLOW = {"highway", "calibration"}  # hours on one core: only when asked for
+SLOW: set[str] = set()  # groups that take hours on one core: only when asked for (none now)
 DETECTED = {"killed", "timeout", "segfault"}
 UNDETECTED = {"survived", "no tests", "suspicious"}
 
@@ -171,8 +175,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--modules", nargs="+", choices=sorted(GROUPS),
                         default=sorted(set(GROUPS) - SLOW),
-                        help="module groups to mutate (default: all but the slow "
-                             f"{', '.join(sorted(SLOW))})")
+                        help="module groups to mutate (default: all"
+                             + (f" but the slow {', '.join(sorted(SLOW))})" if SLOW else ")"))
     parser.add_argument("--tests", nargs="+", metavar="FILE",
                         help="test files (in tests/) to run, or 'all' (default: the groups' own)")
     parser.add_argument("--max-children", type=int, default=1,
