@@ -547,16 +547,21 @@ class GaussianMixturePMB:
 
 
 @njit
+def _label_sums(label, mass, L):
+    """r_i = sum of w_k over the components with label i, for i < L (label -1: none)."""
+    r = np.zeros(L)
+    for k in range(len(label)):
+        if label[k] >= 0:
+            r[label[k]] += mass[k]
+    return r
+
+
+@njit
 def _rank_bernoullis(label, mass, newborn, used, M, min_existence):
     """(used slots, measurements with a newborn Bernoulli, the existence of each of those
     in that order, their indices strongest first among those at min_existence or above)."""
-    r_old = np.zeros(len(used))
-    r_new = np.zeros(M)
-    for k in range(len(label)):
-        if label[k] >= 0:
-            r_old[label[k]] += mass[k]
-        if newborn[k] >= 0:
-            r_new[newborn[k]] += mass[k]
+    r_old = _label_sums(label, mass, len(used))
+    r_new = _label_sums(newborn, mass, M)
     old = np.flatnonzero(used)
     new = np.flatnonzero(r_new > 0)
     r_all = np.concatenate((r_old[old], r_new[new]))
@@ -621,10 +626,7 @@ def _occludable(label, mass, occ_all, used, hits, confirm_hits, stationary):
     o that weighs a detection's source, is the `stationary` occludability for them); the
     Poisson part's components keep w_k."""
     n = len(label)
-    r = np.zeros(len(used))
-    for k in range(n):
-        if label[k] >= 0:
-            r[label[k]] += mass[k]
+    r = _label_sums(label, mass, len(used))
     established = np.zeros(n, dtype=np.bool_)
     occ, o_seen, within = np.zeros(n), np.full(n, stationary), np.empty(n)
     for k in range(n):
@@ -713,10 +715,7 @@ def _confirm_in_place(used, age, hits, label, window, needed):
 def _cap_in_place(mass, label, L):
     """`GaussianMixturePMB._cap_existence` in place: an object whose masses sum above 1
     (rounding) has them scaled by 1 / r."""
-    r = np.zeros(L)
-    for k in range(len(label)):
-        if label[k] >= 0:
-            r[label[k]] += mass[k]
+    r = _label_sums(label, mass, L)
     for k in range(len(label)):
         i = label[k]
         if i >= 0 and r[i] > 1.0:
@@ -814,12 +813,9 @@ def _predict_in_place(mean, cov, coasting, F, Q, F_coast, Q_coast):
 def _object_moments(label, mass, mean, cov, L):
     """`GaussianMixturePMB.object_moments` of components with these labels: per slot the
     existence, the mass-weighted mean state and the centre's standard deviation."""
-    r = np.zeros(L)
+    r = _label_sums(label, mass, L)
     means = np.zeros((L,) + mean.shape[1:])
     var = np.zeros((L, 2))
-    for k in range(len(label)):
-        if label[k] >= 0:
-            r[label[k]] += mass[k]
     for k in range(len(label)):
         i = label[k]
         if i >= 0:
