@@ -132,13 +132,16 @@ def test_miss_terms(seed, n, M):
 
 
 @pytest.mark.parametrize("seed,n,M", CASES)
-@pytest.mark.parametrize("presorted", [False, True])
+@pytest.mark.parametrize("presorted", [False, True, "births"])
 def test_sort_pool(seed, n, M, presorted):
-    """_sort_pool reorders the seven pool arrays in place as the old stable argsort did."""
+    """_sort_pool reorders the seven pool arrays in place as the old stable argsort did,
+    also when only the births appended at the end (label -1) are out of place."""
     rng = np.random.default_rng(seed)
     label = labels(rng, n)
     if presorted:
         label.sort()
+    if presorted == "births":
+        label[len(label) - len(label) // 4:] = -1
     mean, cov = states(rng, n)
     pool = [masses(rng, n), mean, cov, rng.uniform(0, 1, n), rng.uniform(0, 1, n),
             rng.uniform(0, 2, n), label]

@@ -658,7 +658,27 @@ def _miss_terms(det, occ, visible, hidden):
 
 @njit
 def _sort_pool(mass, mean, cov, det, occ, coast, label):
-    """Stable sort of the pool's arrays (views of its first n entries) by label, in place."""
+    """Stable sort of the pool's arrays (views of its first n entries) by label, in place.
+    The usual pool is sorted but for the births appended at its end (label -1): then the
+    stable sort is a rotation that moves them in front of the labelled components."""
+    n = len(label)
+    t = n
+    while t > 0 and label[t - 1] == -1:
+        t -= 1
+    p = 0
+    while p < t and label[p] == -1:
+        p += 1
+    for k in range(p + 1, t):
+        if label[k] < label[k - 1]:
+            break
+    else:
+        if p < t < n:
+            for a in (mass, det, occ, coast):
+                _rotate(a, p, t)
+            _rotate(mean, p, t)
+            _rotate(cov, p, t)
+            _rotate(label, p, t)
+        return
     order = np.argsort(label, kind="mergesort")
     for i in range(len(order)):
         if order[i] != i:
@@ -672,6 +692,14 @@ def _sort_pool(mass, mean, cov, det, occ, coast, label):
     occ[:] = occ[order]
     coast[:] = coast[order]
     label[:] = label[order]
+
+
+@njit
+def _rotate(a, p, t):
+    """a[p:] becomes a[t:] followed by a[p:t]."""
+    tail = a[p:].copy()
+    a[p:p + len(a) - t] = tail[t - p:]
+    a[p + len(a) - t:] = tail[:t - p]
 
 
 @njit
