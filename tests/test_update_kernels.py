@@ -25,6 +25,7 @@ from occtrack.filters.gmpmb import (
     _confirm_in_place,
     _count_in_place,
     _inherit,
+    _keep_labels,
     _learnt_sizes,
     _merge_packed,
     _miss_terms,
@@ -253,6 +254,33 @@ def test_rank_bernoullis(seed, n, M):
     ranked = ranked[eligible[ranked]]
     equal(_rank_bernoullis(label, mass, newborn, used, M, min_existence),
           (old, new, r_all, ranked))
+
+
+@pytest.mark.parametrize("seed,n,M", CASES + [(7, 120, 40)])
+@pytest.mark.parametrize("limit", [0, 1, 3])
+def test_keep_labels(seed, n, M, limit):
+    """_keep_labels keeps the strongest Bernoullis (at most `limit`), frees the other used
+    slots, unlabels their components and lists the cut existences, as the old numpy lines of
+    `_assign_labels` did around _rank_bernoullis and _split_ranked."""
+    rng = np.random.default_rng(seed)
+    label = np.where(rng.random(n) < 0.5, -1, labels(rng, n))
+    mass = rng.integers(1, 9, n) / 8.0
+    newborn = newborns(rng, label, M)
+    used = rng.random(SLOTS) < 0.7
+    old, new, r_all, ranked = _rank_bernoullis(label, mass, newborn, used.copy(), M, 0.25)
+    held, lost = len(ranked), np.zeros(0)
+    if limit and held > limit:
+        lost, ranked = r_all[ranked[limit:]], ranked[:limit]
+    keep_old, keep_new = _split_ranked(ranked, len(old))
+    expected_used = used.copy()
+    expected_used[old[~keep_old]] = False
+    gone = np.zeros(SLOTS, dtype=bool)
+    gone[old[~keep_old]] = True
+    expected = np.where((label >= 0) & gone[np.maximum(label, 0)], -1, label)
+    out = _keep_labels(label, mass, newborn, used, M, 0.25, limit)
+    equal(out[:3], (expected, new[keep_new], lost))
+    assert out[3] == held
+    equal(used, expected_used)
 
 
 @pytest.mark.parametrize("seed", range(6))

@@ -486,34 +486,23 @@ class GaussianMixturePMB:
         one above the threshold, a warning gives the count); recycle the others into the
         Poisson part."""
         limit = self.config.max_labels
-        L = len(self.slot_used)
-        old, new, r_all, ranked = _rank_bernoullis(label, mass, newborn, self.slot_used, M,
-                                                   self.config.label_min_existence)
-        if limit and len(ranked) > limit:
-            lost = r_all[ranked[limit:]]
+        label, meas, lost, held = _keep_labels(label, mass, newborn, self.slot_used, M,
+                                               self.config.label_min_existence, limit)
+        if len(lost):
             self._warn_once("labels", (
-                f"max_labels = {limit} reached at step {self.steps + 1}: {len(ranked)} "
+                f"max_labels = {limit} reached at step {self.steps + 1}: {held} "
                 f"Bernoullis held existence >= {self.config.label_min_existence:g}, the "
                 f"{len(lost)} weakest (existence up to {lost.max():.3g}; "
                 f"{int((lost > self.config.report_existence).sum())} of them above "
                 f"report_existence) were recycled into the Poisson part and lose their tracks; "
                 f"set max_labels = 0 to let labels grow with the scene (reported once)"))
-            ranked = ranked[:limit]
-        keep_old, keep_new = _split_ranked(ranked, len(old))
-
-        dropped = old[~keep_old]
-        if len(dropped):
-            self.slot_used[dropped] = False
-            gone = np.zeros(L, dtype=bool)
-            gone[dropped] = True
-            label = np.where((label >= 0) & gone[np.maximum(label, 0)], -1, label)
-        if len(keep_new):
-            self._reserve_slots(int(self.slot_used.sum()) + len(keep_new))
-            label = _open_slots(label, newborn, new[keep_new], M, self._next_serial,
+        if len(meas):
+            self._reserve_slots(int(self.slot_used.sum()) + len(meas))
+            label = _open_slots(label, newborn, meas, M, self._next_serial,
                                 self.slot_used, self.slot_serial, self.slot_age,
                                 self.slot_hits, self.slot_coast, self.slot_detection,
                                 self.slot_class, NO_CLASSES if classes is None else classes)
-            self._next_serial += len(keep_new)
+            self._next_serial += len(meas)
         return label
 
     def _merge(self, mass, mean, cov, det, occ, coast, label):
@@ -567,6 +556,32 @@ def _rank_bernoullis(label, mass, newborn, used, M, min_existence):
     r_all = np.concatenate((r_old[old], r_new[new]))
     ranked = np.argsort(-r_all, kind="mergesort")
     return old, new, r_all, ranked[r_all[ranked] >= min_existence]
+
+
+@njit
+def _keep_labels(label, mass, newborn, used, M, min_existence, limit):
+    """`GaussianMixturePMB._assign_labels` up to the opening of new slots: the strongest
+    Bernoullis at min_existence or above keep (or will get) a label, at most `limit` of them
+    when limit > 0; the other used slots are freed in place and their components' labels set
+    to -1. Returns (labels, the measurements whose newborn gets a slot (ascending), the
+    existences cut by the limit, how many Bernoullis were at min_existence or above)."""
+    old, new, r_all, ranked = _rank_bernoullis(label, mass, newborn, used, M, min_existence)
+    held = len(ranked)
+    lost = np.empty(0)
+    if limit and held > limit:
+        lost = r_all[ranked[limit:]]
+        ranked = ranked[:limit]
+    keep_old, keep_new = _split_ranked(ranked, len(old))
+    gone = np.zeros(len(used), dtype=np.bool_)
+    for i in range(len(old)):
+        if not keep_old[i]:
+            used[old[i]] = False
+            gone[old[i]] = True
+    out = label.copy()
+    for k in range(len(label)):
+        if label[k] >= 0 and gone[label[k]]:
+            out[k] = -1
+    return out, new[keep_new], lost, held
 
 
 @njit
