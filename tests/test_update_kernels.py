@@ -26,6 +26,7 @@ from occtrack.filters.gmpmb import (
     _count_in_place,
     _inherit,
     _keep_labels,
+    _kept_children,
     _learnt_sizes,
     _merge_packed,
     _miss_terms,
@@ -38,14 +39,22 @@ from occtrack.filters.gmpmb import (
     _pool_cells,
     _predict_in_place,
     _predict_pool,
+    _prior_sizes,
     _rank_bernoullis,
     _relax_in_place,
     _sort_pool,
     _split_ranked,
     _strong_edges,
     _survive_in_place,
+    _trim,
 )
-from occtrack.models.box import _beyond_scores, _edges, _edges_of_boxes, _inside_margin
+from occtrack.models.box import (
+    _beyond_scores,
+    _censored,
+    _edges,
+    _edges_of_boxes,
+    _inside_margin,
+)
 from occtrack.occlusion.box_objectwise import _occluder_boxes
 from occtrack.tracker.tracker import OCCLUDED_ABOVE, _report_rows, _reported
 
@@ -538,6 +547,27 @@ def test_child_parents(seed, n, M):
           (e_keep, parent, j, children[e_keep]))
 
 
+@pytest.mark.parametrize("seed,n,M", CASES + [(7, 40, 6)])
+@pytest.mark.parametrize("cap", [0, 1, 2])
+@pytest.mark.parametrize("given", [False, True])
+def test_kept_children(seed, n, M, cap, given):
+    """_kept_children selects (the given indices, else those above prune_mass), orders by
+    _child_parents and trims to cap per object as the old lines of `_update` did."""
+    rng = np.random.default_rng(seed)
+    P = n * M
+    pk, pj = np.repeat(np.arange(n), M), np.tile(np.arange(M), n)
+    children = rng.uniform(0, 1, n + P)
+    label = labels(rng, n)
+    selected = np.flatnonzero(rng.random(n + P) < 0.6) if given else None
+    keep = selected if given else np.flatnonzero(children > 0.3)
+    keep, parent, j, mass = _child_parents(keep, n, pk, pj, M, children)
+    if cap:
+        trim = _trim(mass, label[parent], j, cap, SLOTS)
+        keep, parent, j, mass = keep[trim], parent[trim], j[trim], mass[trim]
+    equal(_kept_children(children, selected, 0.3, n, pk, pj, M, label, cap, SLOTS),
+          (keep, parent, j, mass))
+
+
 @pytest.mark.parametrize("seed,n,M", CASES)
 def test_inherit(seed, n, M):
     """_inherit copies the parents' means, covariances and labels and finds the hit and
@@ -583,6 +613,24 @@ def test_learnt_sizes(seed):
     expected = (total / count,
                 np.sqrt(np.maximum(squares / count - (total / count) ** 2, 1.0)))
     equal(_learnt_sizes(count, total, squares), expected)
+
+
+@pytest.mark.parametrize("seen", [0, 1, 2, 9])
+@pytest.mark.parametrize("mean_set", [None, (12.0, 34.0)])
+@pytest.mark.parametrize("std_set", [None, (1.5, 0.5)])
+def test_prior_sizes(seen, mean_set, std_set):
+    """_prior_sizes gives the old `_size_prior`: the settings, else the detections' sizes
+    once two were seen, else 30 x 90 px and a third of it; the std floored at 1 px."""
+    rng = np.random.default_rng(seen)
+    half = rng.uniform(0.5, 60.0, (seen, 2))
+    stats = np.array([np.full(2, float(seen)), half.sum(axis=0), (half * half).sum(axis=0)])
+    learnt = _learnt_sizes(stats[0], stats[1], stats[2]) if seen >= 2 else None
+    mean = (np.asarray(mean_set) if mean_set is not None else
+            learnt[0] if learnt else np.array([30.0, 90.0]))
+    std = (np.asarray(std_set) if std_set is not None else
+           learnt[1] if learnt else mean / 3.0)
+    settings = [np.zeros(0) if x is None else np.asarray(x) for x in (mean_set, std_set)]
+    equal(_prior_sizes(stats, *settings), (mean, np.maximum(std, 1.0)))
 
 
 @pytest.mark.parametrize("seed,n,M", CASES)
@@ -782,7 +830,8 @@ def test_inside_margin(seed, n, M):
 
 @pytest.mark.parametrize("seed,n,M", CASES)
 def test_beyond_scores(seed, n, M):
-    """_beyond_scores equals the old standard scores of the border in loglik_pairs."""
+    """_censored lists the edges some detection has on the border, and _beyond_scores equals
+    the old standard scores of the border in loglik_pairs on those edges."""
     rng = np.random.default_rng(seed)
     means, covs = states(rng, n)
     zhat = _edges(means)
@@ -791,9 +840,13 @@ def test_beyond_scores(seed, n, M):
     margin, image_size = 2.0, np.array([640.0, 480.0])
     sd = np.sqrt(np.stack([S[..., 0, 0], S[..., 1, 1]], axis=-1))
     border = np.stack([np.full(2, margin), image_size - margin], axis=-1)
-    expected = np.array([1.0, -1.0]) * (border - zhat) / sd
+    scores = np.array([1.0, -1.0]) * (border - zhat) / sd
+    observed = rng.random((M, 2, 2)) < 0.8
+    censored = ~observed.all(axis=0)
     W, H = image_size
-    equal([_beyond_scores(zhat, S, margin, W - margin, H - margin)], [expected])
+    equal([_censored(observed)], [censored])
+    equal([_beyond_scores(zhat, S, margin, W - margin, H - margin, observed)],
+          [scores[:, censored]])
 
 
 @pytest.mark.parametrize("seed,n,M", CASES)

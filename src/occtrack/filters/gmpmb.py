@@ -150,6 +150,8 @@ class GaussianMixturePMB:
         self.iterations = 0  # loopy BP iterations of the last step
         # running sums of detected half-sizes (count, sum, sum of squares) for the birth prior
         self._size_stats = np.zeros((3, 2))
+        self._size_settings = tuple(np.zeros(0) if value is None else np.asarray(value, float)
+                                    for value in (c.birth_half_size, c.birth_half_size_std))
         self._warned: set[str] = set()  # hard limits already reported
 
     # -- storage --------------------------------------------------------------------------
@@ -274,20 +276,7 @@ class GaussianMixturePMB:
     def _size_prior(self) -> tuple[np.ndarray, np.ndarray]:
         """Half-size (mean, std) of a newborn, px: the configured values, else those of the
         detections seen so far, else (30, 90) and a third of it."""
-        c = self.config
-        count, total, squares = self._size_stats
-        learnt = count[0] >= 2
-        if learnt:
-            learnt_mean, learnt_std = _learnt_sizes(count, total, squares)
-        if c.birth_half_size is not None:
-            mean = np.asarray(c.birth_half_size, dtype=float)
-        else:
-            mean = learnt_mean if learnt else np.array([30.0, 90.0])
-        if c.birth_half_size_std is not None:
-            std = np.asarray(c.birth_half_size_std, dtype=float)
-        else:
-            std = learnt_std if learnt else mean / 3.0
-        return mean, np.maximum(std, 1.0)
+        return _prior_sizes(self._size_stats, *self._size_settings)
 
     def _learn_sizes(self, z: np.ndarray, observed: np.ndarray) -> None:
         _count_sizes(z, observed, self._size_stats)
@@ -360,11 +349,9 @@ class GaussianMixturePMB:
         # children: one miss child per component, then one hit child per pair
         children = _children(mass, miss, rows, hit, pj, edge_of_pair, strong, marg.p_hit,
                              L_edge, marg.p_new, w_new, marg.p_miss, miss_obj)
-        keep, parent, j, new_mass = _child_parents(self._select(children), n, pk, pj, M,
-                                                   children)
-        if c.max_components_per_object:
-            trim = self._trim_objects(new_mass, label[parent], j)
-            keep, parent, j, new_mass = keep[trim], parent[trim], j[trim], new_mass[trim]
+        keep, parent, j, new_mass = _kept_children(
+            children, self._select(children) if c.capacity else None, c.prune_mass, n, pk, pj,
+            M, label, c.max_components_per_object, len(self.slot_used))
         new_mean, new_cov, new_label, h, newborn = _inherit(mean, cov, label, parent, j)
         new_det, new_occ, new_coast = _child_features(
             parent, j, det, occ, self.occ[:n], established, v, q, miss, seen_hidden, coast,
@@ -994,6 +981,25 @@ def _learnt_sizes(count, total, squares):
 
 
 @njit
+def _prior_sizes(stats, setting_mean, setting_std):
+    """`GaussianMixturePMB._size_prior` from the running count, sum and sum of squares
+    `stats` (3, 2) and the configured mean and std (empty: not set)."""
+    learnt = stats[0, 0] >= 2
+    learnt_mean, learnt_std = np.zeros(2), np.zeros(2)
+    if learnt:
+        learnt_mean, learnt_std = _learnt_sizes(stats[0], stats[1], stats[2])
+    if len(setting_mean):
+        mean = setting_mean.copy()
+    else:
+        mean = learnt_mean if learnt else np.array([30.0, 90.0])
+    if len(setting_std):
+        std = setting_std.copy()
+    else:
+        std = learnt_std if learnt else mean / 3.0
+    return mean, np.maximum(std, 1.0)
+
+
+@njit
 def _append_births(n, mass, means, covs, det, occ, pool_mass, pool_mean, pool_cov, pool_det,
                    pool_occ, pool_label, pool_coast):
     """Append the birth components of positive mass to the pool after its first n (the
@@ -1062,6 +1068,20 @@ def _child_parents(keep, n, pk, pj, M, children):
     order = np.argsort(key, kind="mergesort")
     keep, parent, j = keep[order], parent[order], j[order]
     return keep, parent, j, children[keep]
+
+
+@njit
+def _kept_children(children, selected, prune_mass, n, pk, pj, M, label, cap, L):
+    """The children kept, as `_child_parents` gives them: those `selected` (None: those
+    heavier than prune_mass), then, when cap > 0, at most cap per object (`_trim`, masses
+    rescaled)."""
+    keep = np.flatnonzero(children > prune_mass) if selected is None else selected
+    keep, parent, j, mass = _child_parents(keep, n, pk, pj, M, children)
+    if cap:
+        trim = _trim(mass, label[parent], j, cap, L)
+        if not trim.all():
+            keep, parent, j, mass = keep[trim], parent[trim], j[trim], mass[trim]
+    return keep, parent, j, mass
 
 
 @njit

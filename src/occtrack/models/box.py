@@ -131,19 +131,17 @@ class BoxMeasurement:
                      observed: np.ndarray, k: np.ndarray, j: np.ndarray) -> np.ndarray:
         """log p(z_j | component k) of the pairs (k[e], j[e]) only, censored edges included:
         the numbers `loglik` gives for those pairs."""
-        if observed.all():
-            beyond = np.zeros((0, 2, 2))
-        else:  # log P(edge beyond the border) of every component, as in `loglik`, on the
-            # edges (axis, low or high) that some detection has on the border only
-            W, H = self.image_size
-            log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
-            scores = _beyond_scores(zhat, S, self.border_margin, W - self.border_margin,
-                                    H - self.border_margin)
-            censored = ~observed.all(axis=0)
-            beyond = np.zeros(zhat.shape)
-            beyond[:, censored] = log_ndtr(scores[:, censored]) + log_peak[:, None]
-        return _loglik_pairs(zhat, S, z, observed, np.asarray(k, dtype=np.int64),
-                             np.asarray(j, dtype=np.int64), beyond)
+        k, j = np.asarray(k, dtype=np.int64), np.asarray(j, dtype=np.int64)
+        if _every_edge_measured(observed):
+            return _loglik_pairs(zhat, S, z, observed, k, j, np.zeros((len(zhat), 0)),
+                                 np.zeros(len(zhat)))
+        # log P(edge beyond the border) of every component, as in `loglik`, on the edges
+        # (axis, low or high) that some detection has on the border only
+        W, H = self.image_size
+        log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
+        scores = _beyond_scores(zhat, S, self.border_margin, W - self.border_margin,
+                                H - self.border_margin, observed)
+        return _loglik_pairs(zhat, S, z, observed, k, j, log_ndtr(scores), log_peak)
 
     def update(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                observed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -157,11 +155,20 @@ class BoxMeasurement:
 
 
 @njit
-def _loglik_pairs(zhat, S, z, observed, k, j, beyond):
+def _loglik_pairs(zhat, S, z, observed, k, j, log_phi, log_peak):
     """log N of the measured edges of z_j under component k, per pair, plus the log
-    probability `beyond` (K, 2, 2) of each edge on the border; S^-1 and the log-determinants
-    in closed form per component and axis, once."""
+    probability log_phi[k, c] + log_peak[k] of each edge on the border, c the edge's column
+    among the censored ones (`_censored(observed)`, in (axis, low or high) order); S^-1 and
+    the log-determinants in closed form per component and axis, once."""
     K = len(zhat)
+    censored = _censored(observed)
+    column = np.zeros((2, 2), dtype=np.int64)
+    count = 0
+    for axis in range(2):
+        for side in range(2):
+            if censored[axis, side]:
+                column[axis, side] = count
+                count += 1
     log_det, log_a, log_c = np.empty((K, 2)), np.empty((K, 2)), np.empty((K, 2))
     for i in range(K):
         for axis in range(2):
@@ -185,11 +192,11 @@ def _loglik_pairs(zhat, S, z, observed, k, j, beyond):
             if o0:
                 total += r0 * r0 / a + log_a[ke, axis]
             else:
-                total -= 2.0 * beyond[ke, axis, 0]
+                total -= 2.0 * (log_phi[ke, column[axis, 0]] + log_peak[ke])
             if o1:
                 total += r1 * r1 / c + log_c[ke, axis]
             else:
-                total -= 2.0 * beyond[ke, axis, 1]
+                total -= 2.0 * (log_phi[ke, column[axis, 1]] + log_peak[ke])
         out[e] = -0.5 * total
     return out
 
@@ -259,16 +266,41 @@ def _inside_margin(z, margin, right, bottom):
 
 
 @njit
-def _beyond_scores(zhat, S, margin, right, bottom):
-    """Standard scores (K, 2, 2) of the image border under each predicted edge: the edge
-    lies beyond the border with probability Phi(score): (margin - zhat) / sd for a low edge,
+def _censored(observed):
+    """(2, 2): which edges (axis, low or high) some detection of `observed` (M, 2, 2) has on
+    the border."""
+    out = np.zeros((2, 2), dtype=np.bool_)
+    for j in range(len(observed)):
+        for axis in range(2):
+            for side in range(2):
+                if not observed[j, axis, side]:
+                    out[axis, side] = True
+    return out
+
+
+@njit
+def _every_edge_measured(observed):
+    return not _censored(observed).any()
+
+
+@njit
+def _beyond_scores(zhat, S, margin, right, bottom, observed):
+    """Standard scores (K, c) of the image border under the c censored edges
+    (`_censored(observed)`, in (axis, low or high) order) of each predicted box: the edge lies
+    beyond the border with probability Phi(score): (margin - zhat) / sd for a low edge,
     (zhat - right or bottom) / sd for a high one, sd the edge's standard deviation."""
-    out = np.empty(zhat.shape)
+    censored = _censored(observed)
+    out = np.empty((len(zhat), censored.sum()))
     for k in range(len(zhat)):
+        c = 0
         for axis in range(2):
             high = right if axis == 0 else bottom
-            out[k, axis, 0] = (margin - zhat[k, axis, 0]) / np.sqrt(S[k, axis, 0, 0])
-            out[k, axis, 1] = -(high - zhat[k, axis, 1]) / np.sqrt(S[k, axis, 1, 1])
+            if censored[axis, 0]:
+                out[k, c] = (margin - zhat[k, axis, 0]) / np.sqrt(S[k, axis, 0, 0])
+                c += 1
+            if censored[axis, 1]:
+                out[k, c] = -(high - zhat[k, axis, 1]) / np.sqrt(S[k, axis, 1, 1])
+                c += 1
     return out
 
 
