@@ -103,6 +103,13 @@ def test_pair_likelihoods_and_box_update_equal_the_general_forms():
     ref = gaussian.update(means, covs, model.H, model.R(means), z[pairs], observed[pairs])
     np.testing.assert_allclose(new[0], ref[0], rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(new[1], ref[1], rtol=1e-10, atol=1e-9)
+    rows = np.flatnonzero(rng.random(K) < 0.5)
+    in_place = means.copy(), covs.copy()
+    model.update_rows(*in_place, rows, z, observed, pairs[rows])
+    for got, updated, before in zip(in_place, new, (means, covs), strict=True):
+        expected = before.copy()
+        expected[rows] = updated[rows]
+        np.testing.assert_array_equal(got, expected)  # the same numbers, the rest untouched
 
 
 def test_sparse_camera_shift_equals_the_all_pairs_one():

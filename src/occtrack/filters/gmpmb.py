@@ -357,8 +357,7 @@ class GaussianMixturePMB:
             parent, j, det, occ, self.occ[:n], established, v, q, miss, seen_hidden, coast,
             self.dt)
         if len(h):
-            new_mean[h], new_cov[h] = self.measurement.update(
-                new_mean[h], new_cov[h], z[j[h]], observed[j[h]])
+            self.measurement.update_rows(new_mean, new_cov, h, z, observed, j[h])
 
         new_label = self._assign_labels(new_mass, new_label, newborn, M, classes)
         new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label = self._merge(

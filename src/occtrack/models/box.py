@@ -148,10 +148,15 @@ class BoxMeasurement:
         """Kalman update of aligned (component, measurement) pairs with the measured edges:
         `gaussian.update` (Joseph form) written out for this H, element by element (see
         `_update_pairs`)."""
-        new_means = np.empty_like(means)
-        new_covs = np.empty_like(covs)
-        _update_pairs(means, covs, z, observed, self.edge_noise, new_means, new_covs)
+        new_means, new_covs = means.copy(), covs.copy()
+        pairs = np.arange(len(means))
+        _update_pairs(new_means, new_covs, pairs, z, observed, pairs, self.edge_noise)
         return new_means, new_covs
+
+    def update_rows(self, means: np.ndarray, covs: np.ndarray, rows: np.ndarray,
+                    z: np.ndarray, observed: np.ndarray, measurement: np.ndarray) -> None:
+        """`update` in place: component rows[i] by measurement measurement[i]."""
+        _update_pairs(means, covs, rows, z, observed, measurement, self.edge_noise)
 
 
 @njit
@@ -202,21 +207,24 @@ def _loglik_pairs(zhat, S, z, observed, k, j, log_phi, log_peak):
 
 
 @njit
-def _update_pairs(means, covs, z, observed, edge_noise, new_means, new_covs):
-    """Kalman update of pair i (component i, measurement z_i), per axis. With u = P h0',
-    w = P h1' (h0 = [1, 0, -1], h1 = [1, 0, 1] the edge rows, zero when the edge is not
-    measured), S the innovation covariance and gains g0, g1 (the columns of P H' S^-1), the
-    Joseph form (I - G H) P (I - G H)' + G R G' expands to
+def _update_pairs(means, covs, rows, z, observed, measurement, edge_noise):
+    """Kalman update, in place, of component rows[i] by measurement j = measurement[i], per
+    axis. With u = P h0', w = P h1' (h0 = [1, 0, -1], h1 = [1, 0, 1] the edge rows, zero when
+    the edge is not measured), S the innovation covariance and gains g0, g1 (the columns of
+    P H' S^-1), the Joseph form (I - G H) P (I - G H)' + G R G' expands to
     P - g0 u' - u g0' - g1 w' - w g1' + g0 h0' + g1 h1',  h0 = S00 g0 + S01 g1,
     h1 = S01 g0 + S11 g1, which spares thousands of tiny matrix products in a crowd."""
     u, w, g0, g1, h0, h1 = (np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3),
                             np.empty(3))
-    for i in range(len(means)):
-        var = (edge_noise * max(2.0 * means[i, 1, 2], MIN_HEIGHT)) ** 2
+    P, m = np.empty((3, 3)), np.empty(3)
+    for i in range(len(rows)):
+        k, j = rows[i], measurement[i]
+        var = (edge_noise * max(2.0 * means[k, 1, 2], MIN_HEIGHT)) ** 2
         for axis in range(2):
-            P = covs[i, axis]
-            m0 = 1.0 if observed[i, axis, 0] else 0.0
-            m1 = 1.0 if observed[i, axis, 1] else 0.0
+            P[:] = covs[k, axis]
+            m[:] = means[k, axis]
+            m0 = 1.0 if observed[j, axis, 0] else 0.0
+            m1 = 1.0 if observed[j, axis, 1] else 0.0
             for a in range(3):
                 u[a] = (P[a, 0] - P[a, 2]) * m0
                 w[a] = (P[a, 0] + P[a, 2]) * m1
@@ -229,16 +237,15 @@ def _update_pairs(means, covs, z, observed, edge_noise, new_means, new_covs):
                 g1[a] = (w[a] * s00 - u[a] * s01) / det
                 h0[a] = g0[a] * s00 + g1[a] * s01
                 h1[a] = g0[a] * s01 + g1[a] * s11
-            m = means[i, axis]
-            r0 = (z[i, axis, 0] - m[0] + m[2]) * m0
-            r1 = (z[i, axis, 1] - m[0] - m[2]) * m1
+            r0 = (z[j, axis, 0] - m[0] + m[2]) * m0
+            r1 = (z[j, axis, 1] - m[0] - m[2]) * m1
             for a in range(3):
-                new_means[i, axis, a] = m[a] + g0[a] * r0 + g1[a] * r1
+                means[k, axis, a] = m[a] + g0[a] * r0 + g1[a] * r1
                 for b in range(a, 3):
                     value = (P[a, b] - g0[a] * u[b] - u[a] * g0[b] - g1[a] * w[b]
                              - w[a] * g1[b] + g0[a] * h0[b] + g1[a] * h1[b])
-                    new_covs[i, axis, a, b] = value
-                    new_covs[i, axis, b, a] = value
+                    covs[k, axis, a, b] = value
+                    covs[k, axis, b, a] = value
 
 
 @njit
