@@ -23,6 +23,7 @@ from occtrack.filters.gmpmb import (
     GaussianMixturePMB,
     _cell_keys,
     _packed_order,
+    _trim,
 )
 from occtrack.models.box import edges_from_ltwh
 from occtrack.models.motion import ConstantVelocity
@@ -292,7 +293,7 @@ def test_trim_keeps_each_objects_heaviest_and_its_existence():
     mass, label, meas = mass[order], label[order], meas[order]
     group = np.where(label >= 0, label, np.where(meas >= 0, 10, -1))
     before = mass.copy()
-    keep = f._trim_objects(mass, label, meas)
+    keep = _trim(mass, label, meas, 3, len(f.slot_used))
 
     for g, kept_masses in ((0, [0.4, 0.3, 0.15]), (3, [0.2, 0.1]), (10, [0.3, 0.2, 0.1])):
         mine = group == g
@@ -309,7 +310,7 @@ def test_trim_with_room_to_spare_changes_nothing():
     f = make(max_components_per_object=4)
     mass = np.array([0.3, 0.2, 0.1, 0.4])
     label = np.array([0, 0, -1, 1])
-    keep = f._trim_objects(mass, label, np.array([-1, 0, 0, 0]))
+    keep = _trim(mass, label, np.array([-1, 0, 0, 0]), 4, len(f.slot_used))
     assert keep.all() and mass.tolist() == [0.3, 0.2, 0.1, 0.4]
 
 

@@ -455,16 +455,6 @@ class GaussianMixturePMB:
             keep.sort()
         return keep
 
-    def _trim_objects(self, mass: np.ndarray, label: np.ndarray,
-                      measurement: np.ndarray) -> np.ndarray:
-        """Which children to keep when each Bernoulli keeps at most `max_components_per_object`
-        (its heaviest); the kept ones are scaled up so that its existence is unchanged, only
-        its density loses the tail. `mass` is scaled in place. A Bernoulli born this step is
-        the Poisson part's hit children of its measurement (label -1, `measurement` j >= 0);
-        the Poisson part's miss children (j = -1) are an intensity and are not trimmed."""
-        return _trim(mass, label, measurement, self.config.max_components_per_object,
-                     len(self.slot_used))
-
     def _assign_labels(self, mass: np.ndarray, label: np.ndarray, newborn: np.ndarray,
                        M: int, classes: np.ndarray | None = None) -> np.ndarray:
         """Keep a label for every Bernoulli (existing and new) above the label threshold
@@ -1281,9 +1271,11 @@ def _packed_order(key):
 
 @njit
 def _trim(mass, label, measurement, cap, L):
-    """`GaussianMixturePMB._trim_objects`: the mask of children kept, masses rescaled in
-    place. An object is a label, or (born this step) the Poisson part's hit children of one
-    measurement, keyed L + j; the Poisson part's miss children (key -1) are not trimmed."""
+    """Which children to keep when each Bernoulli keeps at most `cap` (its heaviest): the
+    mask, the kept ones' masses scaled in place so that its existence is unchanged (only its
+    density loses the tail). An object is a label (< L), or, born this step, the Poisson
+    part's hit children of one measurement, keyed L + j; the Poisson part's miss children
+    (key -1) are an intensity and are not trimmed."""
     n = len(mass)
     key = np.empty(n, dtype=np.int64)
     top = -1
