@@ -155,7 +155,8 @@ class BoxMeasurement:
 
     def update_rows(self, means: np.ndarray, covs: np.ndarray, rows: np.ndarray,
                     z: np.ndarray, observed: np.ndarray, measurement: np.ndarray) -> None:
-        """`update` in place: component rows[i] by measurement measurement[i]."""
+        """`update` in place: component rows[i] (distinct rows) by measurement
+        measurement[i]; the other components are left as they are."""
         _update_pairs(means, covs, rows, z, observed, measurement, self.edge_noise)
 
 
