@@ -521,7 +521,7 @@ def test_calibrate_names_what_is_missing():
                               "(class 1 with a consider flag of 1)")
 
 
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # (no numpy warning either)
 def test_one_person_always_detected_gives_no_interval_and_sets_only_the_detectability():
     """One person (one cluster, one block of frames): nothing to resample, so every interval
     is as wide as it can be; detected in every frame, exactly where the truth is: no memory
@@ -546,7 +546,7 @@ def test_one_person_always_detected_gives_no_interval_and_sets_only_the_detectab
     lines = report_lines(cal)
     assert lines[5] == ("  memory per frame P(hit|hit) - P(hit|miss), visible: -; half-second "
                         "ratio -")
-    assert lines[-1] == "  pooled about each edge's bias: edge_noise 0.0000 [nan, nan]"
+    assert lines[-1] == "  pooled about each edge's bias: edge_noise 0.0000 [0.0000, inf]"
 
 
 def _two_people(frames, box1, box2, hit1, hit2, err1=None):
@@ -565,7 +565,7 @@ def _two_people(frames, box1, box2, hit1, hit2, err1=None):
     return calibrate([Labelled("TWO", gt, det, SIZE, 30.0, frames)], seed=1)
 
 
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_edges_with_fewer_than_two_rows_have_no_estimate():
     """Person 1 touches the left, top and bottom borders (only its right edge counts) and is
     detected twice, with right-edge errors +4 and -6 px; person 2 touches the right border and
@@ -597,7 +597,7 @@ def test_edges_with_fewer_than_two_rows_have_no_estimate():
     assert cal.edge_noise.low == 0.0
 
 
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_memory_of_detection_by_hand_with_two_people():
     """Person 1 is detected every other frame, person 2 in runs of 10 frames, over 40 frames.
     After a hit: 20 + 20 pairs, 0 + 18 hits; after a miss: 19 + 19 pairs, 19 + 1 hits. So

@@ -267,6 +267,9 @@ def rate(counts: np.ndarray, frames: float, weights: np.ndarray,
         poisson = r / frames
         deff = max(1.0, var / poisson) if poisson > 0 else 1.0
         deff *= _inflation(len(block_frames)) ** 2
+        if math.isinf(deff):  # one block of frames: nothing bounds the rate above
+            out.append(Estimate(float(r), 0.0, math.inf, int(n[k]), 0.0))
+            continue
         eff_n, eff_frames = n[k] / deff, frames / deff
         lo = chi2.ppf(0.025, 2 * eff_n) / 2 / eff_frames if eff_n > 0 else 0.0
         hi = chi2.ppf(0.975, 2 * eff_n + 2) / 2 / eff_frames
@@ -283,6 +286,8 @@ def _percentile(value: float, draws: np.ndarray, n: int = 0, clusters: int = 0,
         return Estimate(value, float("nan"), float("nan"), n)
     lo, hi = np.percentile(draws, [2.5, 97.5])
     grow = _inflation(clusters) if clusters else 1.0
+    if math.isinf(grow):  # one cluster: its draws say nothing of the spread
+        return Estimate(float(value), float(bounds[0]), float(bounds[1]), n)
     lo, hi = value - grow * max(value - lo, 0.0), value + grow * max(hi - value, 0.0)
     return Estimate(float(value), float(max(lo, bounds[0])), float(min(hi, bounds[1])), n)
 
