@@ -215,14 +215,18 @@ def test_mot17_04_real_detections(mot17_04, tmp_path, capsys):
     assert data["clutter_rate"] > 0 and data["clutter_score_power"] >= 0
 
 
+def _detected(gt: MotTable, keep: np.ndarray) -> MotTable:
+    """The true boxes of `gt` where `keep` (frames, people), as detections (score 0.9)."""
+    rows = np.flatnonzero(keep.ravel())
+    return MotTable(gt.frame[rows], np.full(len(rows), -1), gt.box[rows],
+                    np.full(len(rows), 0.9), np.full(len(rows), -1), np.full(len(rows), -1.0))
+
+
 def _static_people(people: int, frames: int, keep: np.ndarray) -> tuple[MotTable, MotTable]:
     """People standing apart in full view, detected exactly where `keep` (frames, people)."""
     gt = scene(0, frames=frames, cols=people, rows=1)
     gt = MotTable(gt.frame, gt.id, gt.box, gt.score, gt.cls, np.ones(len(gt.frame)))
-    rows = np.flatnonzero(keep.ravel())
-    det = MotTable(gt.frame[rows], np.full(len(rows), -1), gt.box[rows],
-                   np.full(len(rows), 0.9), np.full(len(rows), -1), np.full(len(rows), -1.0))
-    return gt, det
+    return gt, _detected(gt, keep)
 
 
 def test_tracked_detectability_is_p_d_when_misses_are_independent():
@@ -683,22 +687,14 @@ def test_thresholds_at_equality_and_missing_visibility():
     # a box edge exactly BORDER px from the border
     at_border = MotTable(gt.frame, gt.id, np.c_[np.full(len(gt.frame), 2.0), gt.box[:, 1:]],
                          gt.score, gt.cls, np.ones(len(gt.frame)))
-    det_border = at_border.select(np.flatnonzero(keep.ravel()))
-    det_border = MotTable(det_border.frame, np.full(len(det_border.frame), -1), det_border.box,
-                          np.full(len(det_border.frame), 0.9), np.full(len(det_border.frame), -1),
-                          np.full(len(det_border.frame), -1.0))
-    cal = calibrate([Labelled("B", at_border, det_border, SIZE, 30.0, frames)])
+    cal = calibrate([Labelled("B", at_border, _detected(at_border, keep), SIZE, 30.0, frames)])
     assert cal.edge_std["left"].n == 0 and cal.edge_std["top"].n == 80
     right = at_border.box[:, 0] + at_border.box[:, 2]
     shifted = MotTable(at_border.frame, at_border.id,
                        np.c_[SIZE[0] - 2.0 - at_border.box[:, 2], at_border.box[:, 1:]],
                        at_border.score, at_border.cls, at_border.visibility)
     assert np.all(right > 0)
-    det_shift = shifted.select(np.flatnonzero(keep.ravel()))
-    det_shift = MotTable(det_shift.frame, np.full(len(det_shift.frame), -1), det_shift.box,
-                         np.full(len(det_shift.frame), 0.9), np.full(len(det_shift.frame), -1),
-                         np.full(len(det_shift.frame), -1.0))
-    cal = calibrate([Labelled("R", shifted, det_shift, SIZE, 30.0, frames)])
+    cal = calibrate([Labelled("R", shifted, _detected(shifted, keep), SIZE, 30.0, frames)])
     assert cal.edge_std["right"].n == 0 and cal.edge_std["left"].n == 80
 
 
