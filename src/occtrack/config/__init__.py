@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from occtrack._compat import tomllib
-from occtrack.errors import OcctrackError
+from occtrack.errors import OcctrackError, opening
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
 CAMERA_MOTION_NAMES = ("detections", "none")
@@ -223,12 +223,8 @@ def load_toml(path: str | Path) -> dict:
     """The settings in a TOML file, unchecked; OcctrackError if it cannot be read."""
     p = str(path)
     try:
-        with open(p, "rb") as fh:
+        with opening(p, "a TOML file"), open(p, "rb") as fh:
             return tomllib.load(fh)
-    except FileNotFoundError:
-        raise OcctrackError("no such file", p) from None
-    except IsADirectoryError:
-        raise OcctrackError("is a directory, expected a TOML file", p) from None
     except OSError as err:
         raise OcctrackError(f"cannot read: {err.strerror}", p) from None
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as err:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from occtrack.errors import OcctrackError
+from occtrack.errors import OcctrackError, opening
 from occtrack.io.atomic import atomic_write
 
 KINDS = ("det", "gt", "result")
@@ -91,12 +91,9 @@ def _whole(text: str, value: float, what: str, low: int, high: int, path: str,
 def _read(path: str, kind: str) -> MotTable:
     """Every row of a MOTChallenge file, checked cell by cell but not for meaning."""
     try:
-        with open(path, encoding="utf-8", newline="") as fh:
+        with (opening(path, "a MOTChallenge text file"),
+              open(path, encoding="utf-8", newline="") as fh):
             lines = fh.read().splitlines()
-    except FileNotFoundError:
-        raise OcctrackError("no such file", path) from None
-    except IsADirectoryError:
-        raise OcctrackError("is a directory, expected a MOTChallenge text file", path) from None
     except UnicodeDecodeError as err:
         raise OcctrackError(f"not a text file (byte {err.start} is not UTF-8)", path) from None
 
