@@ -338,3 +338,30 @@ def test_births_use_a_sobol_set_scrambled_by_the_seed():
     assert a.shape == (SMALL.birth_particles, 3)
     assert not np.array_equal(a, b)
     assert np.all((a > 0) & (a < 1))  # an unscrambled set starts at the origin
+
+
+@pytest.mark.parametrize("name", ["object-wise-expval", "object-wise-grid"])
+def test_object_wise_handlers_give_the_same_terms_for_lists_and_int32_arrays(name):
+    """The handlers hand owner, lane, weights and existence to compiled kernels through
+    `np.asarray`: lists and other integer widths give the same numbers, bit for bit."""
+    from occtrack.occlusion.highway import HighwayContext
+
+    rng = np.random.default_rng(6)
+    k = 90
+    owner = np.r_[np.repeat([0, 1, 2], 20), np.full(30, -1)]
+    lane = np.r_[np.repeat([0, 1, 1], 20), rng.integers(1, 4, 30)]
+    means = np.c_[rng.uniform(-20.0, 15.0, k), rng.uniform(3.0, 7.0, k), np.zeros(k)]
+    weights = rng.uniform(0.1, 1.0, k)
+    existence = np.array([0.9, 0.6, 0.3])
+    handler = make_occlusion(name, SMALL)
+    common = dict(means=means, covs=None, measurements=Scan.empty(),
+                  measurement_model=MeasurementModel(SMALL))
+    arrays = handler.terms(HighwayContext(weights=weights, owner=owner, existence=existence,
+                                          lane=lane, **common))
+    assert np.ptp(arrays.visible) > 0.2  # something is hidden, by degrees
+    for cast in (lambda a: a.tolist(), lambda a: a.astype(np.int32) if a.dtype.kind == "i" else a):
+        other = handler.terms(HighwayContext(weights=cast(weights), owner=cast(owner),
+                                             existence=cast(existence), lane=cast(lane),
+                                             **common))
+        assert other.visible.tobytes() == arrays.visible.tobytes()
+        assert other.hidden.tobytes() == arrays.hidden.tobytes()

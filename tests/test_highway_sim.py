@@ -170,6 +170,9 @@ def test_union_and_locate():
     assert np.array_equal(locate(np.array([-1.0, 0.0, 2.6, 3.5, 8.0, 9.0]), starts, ends),
                           [-1, 0, -1, 1, 2, -1])
     assert len(union(np.empty(0), np.empty(0))[0]) == 0
+    # touching intervals are one part
+    starts, ends = union(np.array([1.0, 0.0, 2.0]), np.array([2.0, 1.0, 3.0]))
+    assert np.array_equal(starts, [0.0]) and np.array_equal(ends, [3.0])
 
 
 def test_occlusion_by_angle():
@@ -180,6 +183,10 @@ def test_occlusion_by_angle():
     assert occ.right_hidden[1] and occ.left_hidden[2] and not occ.right_hidden[2]
     assert np.allclose(occ.left_span[2], [-2.0, 4.0])
     assert not occ.left_hidden[3] and not occ.right_hidden[3]
+    # one [start, end] per hidden end, NaN for an end that is seen
+    assert occ.left_span.shape == occ.right_span.shape == (4, 2)
+    assert np.allclose(occ.right_span[1], [-2.0, 4.0]) and np.isnan(occ.right_span[2]).all()
+    assert np.isnan(occ.left_span[[0, 3]]).all() and np.isnan(occ.right_span[[0, 3]]).all()
 
 
 def test_hidden_probability_matches_monte_carlo():

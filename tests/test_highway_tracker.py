@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from occtrack.config.highway import HighwayTrackerConfig, SimulationConfig
+from occtrack.config.highway import HighwayTrackerConfig, RoadConfig, SimulationConfig
 from occtrack.errors import OcctrackError
 from occtrack.experiments.highway import evaluate
 from occtrack.filters.particle_tomb import Estimates, HighwayTracker, systematic_resample
@@ -225,6 +225,55 @@ def test_grid_equals_the_plain_reading(contexts):
         assert np.allclose(handler.terms(ctx).visible, expected, rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("lanes", [(1, 0), (1, 1), (2, 2)])
+def test_grid_spans_the_angles_a_second_lane_car_can_reach(lanes):
+    """Cells from -A to A, A = (half_length + max_length + 3 noise_std) / d_2: the widest angle
+    of a measured end in the second lane (the first lane's when the road has one)."""
+    road = RoadConfig(lanes_right=lanes[0], lanes_left=lanes[1])
+    config = HighwayTrackerConfig.matching(SimulationConfig(road=road))
+    second = 3.0 if lanes == (1, 0) else 6.0
+    widest = (30.0 + 7.0 + 3 * 0.75) / second
+    centres = ObjectWiseGrid(config).centres
+    assert len(centres) == config.grid_cells == 101
+    assert centres[0] == -widest and centres[-1] == widest
+    assert np.allclose(np.diff(centres), 2 * widest / 100, rtol=1e-12)
+
+
+def test_grid_reading_at_every_cell_and_past_both_ends():
+    """A lane-1 track whose particles cover different spans (so P(cover) changes from cell to
+    cell) and narrow lane-2 particles on every cell, between cells and past both ends of the
+    grid: the handler equals the plain reading of cells placed as documented."""
+    handler = ObjectWiseGrid(SMALL)
+    widest = (SMALL.road.half_length + SMALL.max_length + 3 * SMALL.noise_std) / 6.0
+    centres = np.linspace(-widest, widest, SMALL.grid_cells)
+    rng = np.random.default_rng(4)
+    occluder = np.c_[rng.uniform(-30.0, 10.0, 40), rng.uniform(4.0, 20.0, 40), np.zeros(40)]
+    mid = np.r_[centres, 0.7 * centres[:-1] + 0.3 * centres[1:], -widest - 0.01, widest + 0.01]
+    behind = np.c_[6.0 * mid - 0.01, np.full(len(mid), 0.02), np.zeros(len(mid))]
+    k = len(behind)
+    ctx = HighwayContext(means=np.r_[occluder, behind], covs=None,
+                         weights=np.r_[rng.uniform(0.5, 1.5, 40), np.ones(k)],
+                         owner=np.r_[np.zeros(40, int), np.full(k, -1)],
+                         existence=np.array([0.8]), measurements=Scan.empty(),
+                         measurement_model=MeasurementModel(SMALL),
+                         lane=np.r_[np.zeros(40, int), np.ones(k, int)])
+    a_l, a_r = occluder[:, 0] / 3.0, occluder[:, :2].sum(axis=1) / 3.0
+    w = ctx.weights[:40] / ctx.weights[:40].sum()
+    p_cover = w @ ((a_l[:, None] < centres) & (centres < a_r[:, None]))
+    open_ = 1.0 - 0.8 * p_cover
+    b_l, b_r = behind[:, 0] / 6.0, behind[:, :2].sum(axis=1) / 6.0
+    expected = np.ones(k)
+    for i in range(k):
+        if b_r[i] < centres[0] or b_l[i] > centres[-1]:
+            continue
+        cells = np.flatnonzero((b_l[i] < centres) & (centres < b_r[i]))
+        if len(cells) == 0:
+            cells = [np.argmin(np.abs(centres - 0.5 * (b_l[i] + b_r[i])))]
+        expected[i] = open_[cells].max()
+    assert len(np.unique(expected)) > 20 and np.all(expected[-2:] == 1.0)
+    assert np.allclose(handler.terms(ctx).visible[40:], expected, rtol=1e-12, atol=1e-14)
+
+
 def _single_occluder_context(existence: float, handler_name: str):
     """One sure track in lane 1 over [-4, 4]; particles of lane 2 behind it and beside it."""
     model = MeasurementModel(SMALL)
@@ -248,7 +297,8 @@ def test_object_wise_handlers_hide_what_is_behind(name):
 
 
 def test_unknown_handler_is_a_user_error():
-    with pytest.raises(OcctrackError, match="unknown occlusion handler"):
+    with pytest.raises(OcctrackError, match="unknown occlusion handler 'object-wise-magic'; "
+                       "choose from measurement-wise, object-wise-expval, object-wise-grid$"):
         make_occlusion("object-wise-magic", SMALL)
 
 
