@@ -18,7 +18,8 @@ from occtrack.scenarios.variants import VARIANTS, write_variant
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=None)
-    parser.add_argument("--trackers", default="none,measurement-wise,bytetrack,ocsort,botsort")
+    parser.add_argument("--trackers",
+                        default="none,measurement-wise,object-wise,bytetrack,ocsort,botsort")
     args = parser.parse_args()
     from occtrack.cli import main as occtrack
 

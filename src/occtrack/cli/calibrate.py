@@ -48,9 +48,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", metavar="TOML", type=Path,
                         help="write the tracker settings (TOML) here ('-': standard output)")
     parser.add_argument("--occlusion", choices=("none", "object-wise", "measurement-wise"),
-                        default="measurement-wise",
+                        default="object-wise",
                         help="the occlusion model the settings are for (default "
-                             "measurement-wise): decides which detectability is written")
+                             "object-wise, the tracker's): decides which detectability is "
+                             "written")
     parser.add_argument("--image-size", type=image_size, metavar="WxH",
                         help="image size where there is no seqinfo.ini")
     parser.add_argument("--fps", type=positive_float, help="frame rate where there is no "

@@ -24,7 +24,7 @@ Gaussian-mixture Poisson multi-Bernoulli tracker, and write a MOTChallenge resul
 
 Detection rows are frame,id,left,top,width,height,score[,...] (the id is ignored). Occlusion:
   none              a missed detection is evidence that the object is gone
-  object-wise       objects hide objects (expected-value approximation)
+  object-wise       objects hide objects (expected-value approximation; the default)
   measurement-wise  detections hide detections, as a detector's non-maximum suppression does
 
 The image size comes from --image-size, else from seqinfo.ini when the file sits in a
@@ -80,7 +80,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="where to write the MOTChallenge result file ('-': standard "
                              "output)")
     parser.add_argument("--occlusion", choices=OCCLUSION_NAMES, default=None,
-                        help="occlusion model (default: measurement-wise, or the config "
+                        help="occlusion model (default: object-wise, or the config "
                              "file's)")
     parser.add_argument("--config", metavar="FILE", help="TOML file of tracker settings")
     parser.add_argument("--frame-step", type=positive_int, metavar="N", default=None,

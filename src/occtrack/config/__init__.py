@@ -47,9 +47,15 @@ class TrackerConfig:
 
     Rates are per second and noises per square-root second, so the settings hold at any
     frame rate; dt = frame_step / fps seconds pass between tracked frames.
+
+    The default occlusion model is object-wise: an object's hit term carries its own
+    visibility, so an object still hidden behind a tracked one cannot take a detection that
+    shows up near where it was lost (measurement-wise weighs a hit by the detection's escape
+    only, and its long-hidden objects take the next person to appear there: twice the
+    identity jumps after a gap of more than 10 frames on each MOT17 sequence, README).
     """
 
-    occlusion: str = "measurement-wise"  # none, object-wise or measurement-wise
+    occlusion: str = "object-wise"  # none, object-wise or measurement-wise
     image_size: tuple[float, float] = (1920.0, 1080.0)  # width, height in px
     fps: float = 30.0  # frames per second of the sequence
     frame_step: int = 1  # track every frame_step-th frame, report every frame
