@@ -776,6 +776,8 @@ def test_birth_size_prior_from_settings_defaults_and_detections():
     assert mean.tolist() == [30.0, 90.0] and std.tolist() == [10.0, 30.0]
     mean, std = make(birth_half_size=(12.0, 34.0), birth_half_size_std=(1.5, 0.5))._size_prior()
     assert mean.tolist() == [12.0, 34.0] and std.tolist() == [1.5, 1.0]  # at least 1 px
+    mean, std = make(birth_half_size=(12, 34), birth_half_size_std=(2, 1))._size_prior()
+    assert mean.dtype == std.dtype == float and mean.tolist() == [12.0, 34.0]  # whole numbers
 
     f = make()
     first = edges_from_ltwh([[100.0, 100.0, 20.0, 60.0]])  # half-sizes 10 x 30

@@ -56,6 +56,8 @@ from occtrack.models.box import (
     _inside_margin,
 )
 from occtrack.occlusion.box_objectwise import _occluder_boxes
+from occtrack.spatial import _sweep
+from occtrack.tracker.camera import _first_best
 from occtrack.tracker.tracker import OCCLUDED_ABOVE, _report_rows, _reported
 
 EDGE_FLOOR = 1e-9
@@ -897,3 +899,47 @@ def test_occluder_boxes(seed, n, M):
     position[occluders] = np.arange(len(occluders))
     own = position[owner]
     equal(_occluder_boxes(boxes, weights, owner, occluders), (mean_boxes, own))
+
+
+@pytest.mark.parametrize("seed, n, M", CASES)
+def test_sweep(seed, n, M):
+    """_sweep gives the candidate pairs of `overlapping_pairs` that overlap, in the order of
+    the old array lines (i ascending, then the sweep order)."""
+    rng = np.random.default_rng(seed)
+    N, K = n + 3, M + 4
+    a = np.sort(rng.uniform(0, 100, (N, 2, 2)), axis=-1)
+    b = np.sort(rng.uniform(0, 100, (K, 2, 2)), axis=-1)
+    order = np.argsort(b[:, 0, 0], kind="stable")
+    low, s_x1, s_y0, s_y1 = b[order, 0, 0], b[order, 0, 1], b[order, 1, 0], b[order, 1, 1]
+    widest = float((b[:, 0, 1] - b[:, 0, 0]).max())
+    start = np.searchsorted(low, a[:, 0, 0] - widest, side="left")
+    stop = np.searchsorted(low, a[:, 0, 1], side="left")
+    counts = np.maximum(stop - start, 0)
+    total = int(counts.sum())
+    i = np.repeat(np.arange(N), counts)
+    k = np.arange(total) + np.repeat(start - (np.cumsum(counts) - counts), counts)
+    ok = (a[i, 0, 0] < s_x1[k]) & (a[i, 1, 0] < s_y1[k]) & (s_y0[k] < a[i, 1, 1])
+    expected = (i[ok], order[k[ok]])
+    assert total > 0 and 0 < ok.sum() < total
+    equal(_sweep(a[:, 0, 0].copy(), a[:, 0, 1].copy(), a[:, 1, 0].copy(), a[:, 1, 1].copy(),
+                 s_x1, s_y0, s_y1, order, start, stop), expected)
+
+
+@pytest.mark.parametrize("seed, n, M", CASES)
+def test_first_best(seed, n, M):
+    """_first_best gives, per group, the largest value and among ties the smallest other, as
+    the old lexsort lines did; groups without a pair get (0, 0)."""
+    rng = np.random.default_rng(seed)
+    size, pairs = n + 2, 3 * M
+    group = rng.integers(0, size, pairs)
+    value = rng.choice([0.2, 0.5, 0.8], pairs) if seed % 2 else rng.uniform(0, 1, pairs)
+    other = rng.integers(0, 9, pairs)
+    best_value, best_index = np.zeros(size), np.zeros(size, dtype=np.int64)
+    if pairs:
+        order = np.lexsort((other, -value, group))
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = group[order[1:]] != group[order[:-1]]
+        winners = order[first]
+        best_value[group[winners]] = value[winners]
+        best_index[group[winners]] = other[winners]
+    equal(_first_best(group, value, other, size), (best_value, best_index))

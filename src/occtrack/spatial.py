@@ -15,12 +15,16 @@ instead. Small problems (N M at most `DENSE_PAIRS`) are tested all at once: it i
 
 Boxes are edge arrays (..., 2, 2): [axis, low/high], axis 0 horizontal and 1 vertical.
 Overlap is strict (boxes that only touch do not overlap). Written here because scipy's trees
-answer distance queries between points, not overlap queries between boxes of many sizes.
+answer distance queries between points, not overlap queries between boxes of many sizes. The
+test of the candidates is compiled (`_sweep`): in a crowd they are a few thousand a frame, and
+the array form made each of them pass through a dozen temporary arrays.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from occtrack.jit import njit
 
 DENSE_PAIRS = 4096  # at most this many pairs: test them all at once
 
@@ -72,14 +76,10 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         widest = float(width[normal].max())
         start = np.searchsorted(low, a_x0 - widest, side="left")
         stop = np.searchsorted(low, a_x1, side="left")
-        counts = np.maximum(stop - start, 0)
-        total = int(counts.sum())
-        if total:
-            i = np.repeat(np.arange(N), counts)
-            k = np.arange(total) + np.repeat(start - (np.cumsum(counts) - counts), counts)
-            ok = (a_x0[i] < s_x1[k]) & (a_y0[i] < s_y1[k]) & (s_y0[k] < a_y1[i])
-            i_parts.append(i[ok])
-            j_parts.append(order[k[ok]])
+        i, j = _sweep(a_x0, a_x1, a_y0, a_y1, s_x1, np.ascontiguousarray(s_y0),
+                      np.ascontiguousarray(s_y1), order, start, stop)
+        i_parts.append(i)
+        j_parts.append(j)
     if wide.any():
         w = np.flatnonzero(wide)
         i, jj = _dense(a, b[w])
@@ -89,3 +89,21 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
     return np.concatenate(i_parts), np.concatenate(j_parts)
+
+
+@njit
+def _sweep(a_x0, a_x1, a_y0, a_y1, s_x1, s_y0, s_y1, order, start, stop):
+    """The pairs (i, order[k]) with k in [start[i], stop[i]) whose boxes overlap (the low x
+    edge is known to be below a_x1[i]), i ascending, then k."""
+    total = 0
+    for i in range(len(start)):
+        total += max(stop[i] - start[i], 0)
+    out_i = np.empty(total, dtype=np.int64)
+    out_j = np.empty(total, dtype=np.int64)
+    found = 0
+    for i in range(len(start)):
+        for k in range(start[i], stop[i]):
+            if a_x0[i] < s_x1[k] and a_y0[i] < s_y1[k] and s_y0[k] < a_y1[i]:
+                out_i[found], out_j[found] = i, order[k]
+                found += 1
+    return out_i[:found], out_j[:found]

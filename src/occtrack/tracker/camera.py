@@ -45,19 +45,19 @@ def _edges(boxes: np.ndarray) -> np.ndarray:
     return np.stack([boxes[:, :2], boxes[:, :2] + boxes[:, 2:]], axis=-1)
 
 
-def _first_best(group: np.ndarray, value: np.ndarray, other: np.ndarray,
-                size: int) -> tuple[np.ndarray, np.ndarray]:
+@njit
+def _first_best(group, value, other, size):
     """Per group g < size: the largest value and, among ties, the smallest `other`
     (argmax's choice); groups without pairs get value 0 and index 0, as argmax over a row of
     zeros gives."""
     best_value, best_index = np.zeros(size), np.zeros(size, dtype=np.int64)
-    if len(group):
-        order = np.lexsort((other, -value, group))
-        first = np.ones(len(order), dtype=bool)
-        first[1:] = group[order[1:]] != group[order[:-1]]
-        winners = order[first]
-        best_value[group[winners]] = value[winners]
-        best_index[group[winners]] = other[winners]
+    seen = np.zeros(size, dtype=np.bool_)
+    for e in range(len(group)):
+        g = group[e]
+        if (not seen[g] or value[e] > best_value[g]
+                or (value[e] == best_value[g] and other[e] < best_index[g])):
+            seen[g] = True
+            best_value[g], best_index[g] = value[e], other[e]
     return best_value, best_index
 
 
