@@ -128,43 +128,79 @@ def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_p
 def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: float,
                      mode_radius: float, min_iou: float, min_pairs: int) -> np.ndarray | None:
     """`estimate_shift` on the pairs that can qualify only; the same result."""
+    previous, current = np.asarray(previous, dtype=float), np.asarray(current, dtype=float)
     hp, hc = previous[:, 3], current[:, 3]
     cp, cc = _centres(previous), _centres(current)
     # a qualifying pair moved less than sqrt(hp hc) < sqrt(height_ratio) hp on each axis
     reach = np.sqrt(height_ratio) * hp * (1.0 + 1e-9) + 1e-9
     around = np.stack([cp - reach[:, None], cp + reach[:, None]], axis=-1)
     i, j = overlapping_pairs(around, np.stack([cc, cc], axis=-1))
-    scale = np.sqrt(hp[i] * hc[j])
-    ratio = hc[j] / np.maximum(hp[i], 1e-9)
-    shift = cc[j] - cp[i]
-    near = (ratio < height_ratio) & (ratio > 1.0 / height_ratio) & (
-        np.abs(shift).max(axis=-1) < scale)
-    if near.sum() < min_pairs:
+    candidates, unit = _candidates(i, j, hp, hc, cp, cc, height_ratio, len(current))
+    if len(unit) < min_pairs:
         return None
-    order = np.lexsort((j[near], i[near]))  # the dense form's order: by previous, then current
-    candidates = shift[near][order]
-    unit = scale[near][order]
     mode = _mode_shift(candidates, mode_radius * unit)
     moved = previous.copy()
     moved[:, :2] += mode
     p, c = overlapping_pairs(_edges(moved), _edges(current))
-    overlap = _iou_pairs(moved[p], current[c])
-    best_iou, best_cur = _first_best(p, overlap, c, len(previous))
-    _, best_prev = _first_best(c, overlap, p, len(current))
-    mutual = (best_prev[best_cur] == np.arange(len(previous))) & (best_iou > min_iou)
-    if mutual.sum() < min_pairs:
+    shifts = _mutual_shifts(p, c, moved, current, cp, cc, min_iou)
+    if len(shifts) < min_pairs:
         return None
-    k = np.flatnonzero(mutual)
-    return _median_rows(cc[best_cur[k]] - cp[k])
+    return _median_rows(shifts)
 
 
-def _iou_pairs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of aligned boxes a[k], b[k] (K, 4), as `occtrack.spatial.iou` computes it."""
-    lo = np.maximum(a[:, :2], b[:, :2])
-    hi = np.minimum(a[:, :2] + a[:, 2:], b[:, :2] + b[:, 2:])
-    inter = np.clip(hi - lo, 0.0, None).prod(axis=-1)
-    union = a[:, 2:].prod(axis=-1) + b[:, 2:].prod(axis=-1) - inter
-    return inter / np.maximum(union, 1e-12)
+@njit
+def _candidates(i, j, hp, hc, cp, cc, height_ratio, M):
+    """Step 1 on the pairs (i, j) within reach: the candidate shifts and their units (box
+    heights), in the dense form's order (by previous box, then current)."""
+    keep = np.empty(len(i), dtype=np.int64)
+    K = 0
+    for e in range(len(i)):
+        a, b = i[e], j[e]
+        scale = math.sqrt(hp[a] * hc[b])
+        ratio = hc[b] / max(hp[a], 1e-9)
+        dx, dy = cc[b, 0] - cp[a, 0], cc[b, 1] - cp[a, 1]
+        if (ratio < height_ratio and ratio > 1.0 / height_ratio
+                and max(abs(dx), abs(dy)) < scale):
+            keep[K] = e
+            K += 1
+    key = np.empty(K, dtype=np.int64)
+    for t in range(K):
+        key[t] = i[keep[t]] * M + j[keep[t]]
+    order = np.argsort(key)
+    candidates, unit = np.empty((K, 2)), np.empty(K)
+    for t in range(K):
+        e = keep[order[t]]
+        a, b = i[e], j[e]
+        candidates[t, 0], candidates[t, 1] = cc[b, 0] - cp[a, 0], cc[b, 1] - cp[a, 1]
+        unit[t] = math.sqrt(hp[a] * hc[b])
+    return candidates, unit
+
+
+@njit
+def _mutual_shifts(p, c, moved, current, cp, cc, min_iou):
+    """Step 3 on the overlapping pairs (p, c) of moved previous and current boxes: the
+    displacement of every pair that is each other's best IoU (ties: the lower index, as
+    argmax), above min_iou, in the order of the previous boxes."""
+    E = len(p)
+    overlap = np.empty(E)
+    for e in range(E):
+        a, b = moved[p[e]], current[c[e]]
+        w = max(min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]), 0.0)
+        h = max(min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]), 0.0)
+        inter = w * h
+        union = a[2] * a[3] + b[2] * b[3] - inter
+        overlap[e] = inter / max(union, 1e-12)
+    N, M = len(moved), len(current)
+    best_iou, best_cur = _first_best(p, overlap, c, N)
+    _, best_prev = _first_best(c, overlap, p, M)
+    shifts = np.empty((N, 2))
+    P = 0
+    for k in range(N):
+        if best_prev[best_cur[k]] == k and best_iou[k] > min_iou:
+            b = best_cur[k]
+            shifts[P, 0], shifts[P, 1] = cc[b, 0] - cp[k, 0], cc[b, 1] - cp[k, 1]
+            P += 1
+    return shifts[:P]
 
 
 @njit
