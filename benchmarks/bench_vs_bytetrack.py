@@ -38,6 +38,32 @@ from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig
 DEFAULT = TrackerConfig().occlusion  # the crowds run the defaults
 
 
+def seen_shares(scene, within: int) -> tuple[float, float, float]:
+    """Of the person-frames after the first second: the share whose person is detected in
+    that frame (a detection at IoU >= 0.5, one to one), detected within the last `within`
+    frames, and detected at some earlier frame. The last two bound what a tracker that holds a
+    person for `within` frames unseen, or for ever, could report."""
+    from scipy.optimize import linear_sum_assignment
+
+    from occtrack.spatial import iou
+
+    truth, det = scene.truth, scene.detections
+    last: dict[int, int] = {}
+    gaps = []
+    for frame, (rows, found) in enumerate(zip(truth.frame_slices(scene.frames),
+                                              det.frame_slices(scene.frames), strict=True)):
+        if len(rows) and len(found):
+            overlap = iou(truth.box[rows], det.box[found])
+            a, b = linear_sum_assignment(-overlap)
+            for person in truth.id[rows[a[overlap[a, b] >= 0.5]]]:
+                last[int(person)] = frame
+        if frame >= scene.fps:
+            gaps.extend(frame - last.get(int(person), -10**9) for person in truth.id[rows])
+    gaps = np.asarray(gaps)
+    return float((gaps == 0).mean()), float((gaps <= within).mean()), float(
+        (gaps < 10**8).mean())
+
+
 def crowd(people: int, frames: int = 300) -> Crowd:
     """Boxes 50 px tall at the far edge (feet at row 130) to 120 px at the near one (row
     1060), heights linear in the feet's row."""
@@ -137,7 +163,7 @@ def main() -> None:
           f"occtrack defaults ({DEFAULT} occlusion):")
     print(f"  {'people':>6}{'dets/frame':>12}{'occtrack tracks':>17}{'ByteTrack tracks':>18}"
           f"{'occtrack f/s':>14}{'ByteTrack f/s':>15}{'ratio':>7}")
-    per_frame = {}
+    per_frame, shares = {}, {}
     for count in people:
         scene = crowd_scene(crowd(count, args.frames), seed=0)
         frames = frames_of(scene.detections, scene.frames)
@@ -148,11 +174,16 @@ def main() -> None:
               f"{np.mean(occ[1]) / count:>16.1%}{np.mean(bt[1]) / count:>18.1%}"
               f"{scene.frames / occ[0]:>14.0f}{scene.frames / bt[0]:>15.0f}"
               f"{bt[0] / occ[0]:>7.2f}")
+        shares[count] = seen_shares(scene, round(TrackerConfig().report_coast_time * scene.fps))
     low, high = min(people), max(people)
     if low != high:
         print(f"  per-frame time from {low} to {high} people: occtrack "
               f"{per_frame[high][0] / per_frame[low][0]:.1f} x, ByteTrack "
               f"{per_frame[high][1] / per_frame[low][1]:.1f} x")
+    print("  people-frames (after the first second) detected in that frame / within the "
+          "report_coast_time before / ever:")
+    for count, (now, recent, ever) in shares.items():
+        print(f"  {count:>6}{now:>10.1%}{recent:>10.1%}{ever:>10.1%}")
 
 
 if __name__ == "__main__":
