@@ -48,7 +48,7 @@ place when complete, so an interrupted run leaves the old file (or none). -o - w
 result to standard output (the summary then goes to standard error).
 
 --config takes a TOML file of TrackerConfig settings (see occtrack.tracker.config), e.g.
-  occlusion = "object-wise"
+  occlusion = "measurement-wise"
   edge_noise = 0.05
 Flags given on the command line win over the file."""
 

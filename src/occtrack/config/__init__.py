@@ -17,7 +17,7 @@ come from the sequence (`seqinfo.ini`, flags), never from a default meant for on
 
 A TOML file holds any subset of the fields at top level, e.g.
 
-    occlusion = "object-wise"
+    occlusion = "measurement-wise"
     image_size = [1280, 720]
     edge_noise = 0.05
 """
