@@ -55,6 +55,51 @@ def test_overlapping_pairs_are_exactly_the_overlapping_ones(seed):
     assert len(set(zip(i.tolist(), j.tolist(), strict=True))) == len(i)
 
 
+def _truth(a, b):
+    return ((a[:, None, :, 0] < b[None, :, :, 1]) & (b[None, :, :, 0] < a[:, None, :, 1])).all(
+        axis=-1)
+
+
+@pytest.mark.parametrize("dense_pairs", [0, None])
+def test_overlapping_pairs_on_both_sides_of_zero(dense_pairs):
+    """Boxes on both sides of the origin (negative edges) are found like any others."""
+    rng = np.random.default_rng(7)
+    a, b = random_boxes(rng, 200), random_boxes(rng, 150)
+    for boxes in (a, b):
+        boxes[:, 0] -= 500.0
+        boxes[:, 1] -= 900.0
+    i, j = spatial.overlapping_pairs(a, b, dense_pairs=dense_pairs)
+    truth = _truth(a, b)
+    assert len(i) == truth.sum() > 100 and truth[i, j].all()
+
+
+@pytest.mark.parametrize("dense_pairs", [0, None])
+def test_touching_boxes_do_not_overlap(dense_pairs):
+    """Overlap is strict on each axis: boxes that share an edge are no pair, a hair more is."""
+    a = np.array([[[0.0, 10.0], [0.0, 10.0]]])
+    touching = np.array([[[10.0, 20.0], [0.0, 10.0]], [[-5.0, 0.0], [2.0, 8.0]],
+                         [[2.0, 8.0], [10.0, 30.0]], [[2.0, 8.0], [-4.0, 0.0]]])
+    i, j = spatial.overlapping_pairs(a, touching, dense_pairs=dense_pairs)
+    assert len(i) == len(j) == 0
+    inside = touching + np.array([[[-1e-9, 0.0], [0.0, 0.0]], [[0.0, 1e-9], [0.0, 0.0]],
+                                  [[0.0, 0.0], [-1e-9, 0.0]], [[0.0, 0.0], [0.0, 1e-9]]])
+    for k in range(4):
+        i, j = spatial.overlapping_pairs(a, inside[k:k + 1], dense_pairs=dense_pairs)
+        assert i.tolist() == [0] and j.tolist() == [0]
+        i, j = spatial.overlapping_pairs(inside[k:k + 1], a, dense_pairs=dense_pairs)
+        assert i.tolist() == [0] and j.tolist() == [0]
+
+
+@pytest.mark.parametrize("N, M", [(0, 0), (0, 5), (5, 0), (1, 5), (5, 1)])
+def test_overlapping_pairs_of_empty_and_single_sets(N, M):
+    """An empty side gives two empty index arrays; a single box on either side is paired."""
+    boxes = np.array([[[0.0, 10.0], [0.0, 10.0]]] * 5) + np.arange(5)[:, None, None]
+    a, b = boxes[:N], boxes[:M]
+    i, j = spatial.overlapping_pairs(a, b)
+    assert i.dtype == j.dtype == np.int64 and len(i) == len(j) == _truth(a, b).sum()
+    assert len(i) == (0 if N == 0 or M == 0 else max(N, M))
+
+
 @pytest.mark.parametrize("clustered", [True, False])
 def test_sparse_loopy_bp_equals_the_dense_form(monkeypatch, clustered):
     """Zero-weight pairs carry no message: BP on the listed pairs, cluster by cluster or as

@@ -921,8 +921,8 @@ def test_sweep(seed, n, M):
     ok = (a[i, 0, 0] < s_x1[k]) & (a[i, 1, 0] < s_y1[k]) & (s_y0[k] < a[i, 1, 1])
     expected = (i[ok], order[k[ok]])
     assert total > 0 and 0 < ok.sum() < total
-    equal(_sweep(a[:, 0, 0].copy(), a[:, 0, 1].copy(), a[:, 1, 0].copy(), a[:, 1, 1].copy(),
-                 s_x1, s_y0, s_y1, order, start, stop), expected)
+    equal(_sweep(a[:, 0, 0].copy(), a[:, 1, 0].copy(), a[:, 1, 1].copy(), s_x1, s_y0, s_y1,
+                 order, start, stop), expected)
 
 
 @pytest.mark.parametrize("seed, n, M", CASES)

@@ -76,7 +76,7 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         widest = float(width[normal].max())
         start = np.searchsorted(low, a_x0 - widest, side="left")
         stop = np.searchsorted(low, a_x1, side="left")
-        i, j = _sweep(a_x0, a_x1, a_y0, a_y1, s_x1, np.ascontiguousarray(s_y0),
+        i, j = _sweep(a_x0, a_y0, a_y1, s_x1, np.ascontiguousarray(s_y0),
                       np.ascontiguousarray(s_y1), order, start, stop)
         i_parts.append(i)
         j_parts.append(j)
@@ -85,16 +85,14 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         i, jj = _dense(a, b[w])
         i_parts.append(i)
         j_parts.append(w[jj])
-    if not i_parts:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty
+    # (the box of median width is never wide, so the sweep always contributes a part)
     return np.concatenate(i_parts), np.concatenate(j_parts)
 
 
 @njit
-def _sweep(a_x0, a_x1, a_y0, a_y1, s_x1, s_y0, s_y1, order, start, stop):
-    """The pairs (i, order[k]) with k in [start[i], stop[i]) whose boxes overlap (the low x
-    edge is known to be below a_x1[i]), i ascending, then k."""
+def _sweep(a_x0, a_y0, a_y1, s_x1, s_y0, s_y1, order, start, stop):
+    """The pairs (i, order[k]) with k in [start[i], stop[i]) whose boxes overlap (below stop,
+    the low x edge is below the high one of box i), i ascending, then k."""
     total = 0
     for i in range(len(start)):
         total += max(stop[i] - start[i], 0)
