@@ -72,6 +72,10 @@ GROUPS = {
                 ["test_highway_kernels.py", "test_highway_tracker.py", "test_highway_sim.py",
                  "test_highway_mutants.py"]),
     "calibration": (["src/occtrack/models/calibration.py"], ["test_calibrate.py"]),
+    "tracker": (["src/occtrack/tracker/tracker.py", "src/occtrack/tracker/camera.py",
+                 "src/occtrack/tracker/boxes.py"],
+                ["test_tracker.py", "test_api.py", "test_scaling.py",
+                 "test_validation_messages.py", "test_supervision.py"]),
 }
 SLOW: set[str] = set()  # groups that take hours on one core: only when asked for (none now)
 DETECTED = {"killed", "timeout", "segfault"}

@@ -196,6 +196,21 @@ def test_expval_equals_the_plain_product(contexts):
         assert np.allclose(handler.terms(ctx).visible, v, rtol=1e-12, atol=1e-14)
 
 
+def _plain_reading(open_rows, centres, a_l, a_r):
+    """Each particle reads the most open cell (its row of `open_rows`) whose centre it covers,
+    the cell nearest its middle if it covers none, and 1 outside the grid."""
+    inside = (a_l[:, None] < centres) & (centres < a_r[:, None])
+    expected = np.ones(len(a_l))
+    for k in range(len(a_l)):
+        if a_r[k] < centres[0] or a_l[k] > centres[-1]:
+            continue
+        cells = np.flatnonzero(inside[k])
+        if len(cells) == 0:
+            cells = [np.argmin(np.abs(centres - 0.5 * (a_l[k] + a_r[k])))]
+        expected[k] = open_rows[k, cells].max()
+    return expected
+
+
 def test_grid_equals_the_plain_reading(contexts):
     """The grid handler (run pruning, sparse-table maxima) equals the cell-by-cell reading:
     cell open = prod over nearer tracks of (1 - r P(track covers the cell centre)); a particle
@@ -214,14 +229,7 @@ def test_grid_equals_the_plain_reading(contexts):
             p = ctx.weights[mine] @ inside[mine] / max(ctx.weights[mine].sum(), 1e-300)
             lane = ctx.lane[mine][0]
             open_[lane + 1:] *= 1 - ctx.existence[i] * np.minimum(p, 1.0)
-        expected = np.ones(len(a_l))
-        for k in range(len(a_l)):
-            if a_r[k] < centres[0] or a_l[k] > centres[-1]:
-                continue
-            cells = np.flatnonzero(inside[k])
-            if len(cells) == 0:
-                cells = [np.argmin(np.abs(centres - 0.5 * (a_l[k] + a_r[k])))]
-            expected[k] = open_[ctx.lane[k], cells].max()
+        expected = _plain_reading(open_[ctx.lane], centres, a_l, a_r)
         assert np.allclose(handler.terms(ctx).visible, expected, rtol=1e-9, atol=1e-12)
 
 
@@ -262,14 +270,7 @@ def test_grid_reading_at_every_cell_and_past_both_ends():
     p_cover = w @ ((a_l[:, None] < centres) & (centres < a_r[:, None]))
     open_ = 1.0 - 0.8 * p_cover
     b_l, b_r = behind[:, 0] / 6.0, behind[:, :2].sum(axis=1) / 6.0
-    expected = np.ones(k)
-    for i in range(k):
-        if b_r[i] < centres[0] or b_l[i] > centres[-1]:
-            continue
-        cells = np.flatnonzero((b_l[i] < centres) & (centres < b_r[i]))
-        if len(cells) == 0:
-            cells = [np.argmin(np.abs(centres - 0.5 * (b_l[i] + b_r[i])))]
-        expected[i] = open_[cells].max()
+    expected = _plain_reading(np.tile(open_, (k, 1)), centres, b_l, b_r)
     assert len(np.unique(expected)) > 20 and np.all(expected[-2:] == 1.0)
     assert np.allclose(handler.terms(ctx).visible[40:], expected, rtol=1e-12, atol=1e-14)
 
