@@ -210,3 +210,90 @@ def test_reset_starts_over():
     assert tracker.filter.steps == 0
     tracks = tracker.update([[900, 100, 940, 220]], timestamp=0.0)  # time may start again
     assert tracks.ids.tolist() == [1] and tracks.boxes.tolist() == [[900, 100, 940, 220]]
+
+
+def _people(shift=(0.0, 0.0), zoom=1.0):
+    """Three people standing still (left, top, width, height), as a camera that moved by
+    `shift` (and zoomed by `zoom`) sees them."""
+    boxes = np.array([[100.0, 400.0, 40.0, 100.0], [700.0, 420.0, 44.0, 110.0],
+                      [1300.0, 380.0, 38.0, 96.0]])
+    return np.c_[boxes[:, :2] * zoom + shift, boxes[:, 2:] * zoom]
+
+
+@pytest.mark.parametrize("how", ["given", "estimated", "none"])
+def test_camera_motion_given_estimated_or_none(how):
+    """People standing still while the camera pans by 60 px in one frame: with the pan given
+    (a 2 x 3 affine) or estimated from the detections each track takes its person's shifted
+    box and stays at rest; with `camera_motion = "none"` and nothing given, the jump is too
+    far for a person standing still and the tracks coast where they were."""
+    config = TrackerConfig(camera_motion="none" if how != "estimated" else "detections")
+    tracker = Tracker(config)
+    for _ in range(8):
+        tracker.step(_people())
+    motion = [[1.0, 0.0, 60.0], [0.0, 1.0, -20.0]] if how == "given" else None
+    tracks = tracker.step(_people((60.0, -20.0)), camera_motion=motion)
+    assert len(tracks) == 3 and tracks.ids.tolist() == [1, 2, 3]
+    if how == "none":
+        assert tracks.detection_index.tolist() == [-1, -1, -1]
+        np.testing.assert_allclose(tracks.boxes, _people(), atol=2.0)
+    else:
+        assert tracks.detection_index.tolist() == [0, 1, 2]
+        np.testing.assert_array_equal(tracks.boxes, _people((60.0, -20.0)))
+        assert np.abs(tracks.velocities).max() < 1.0  # px / s
+
+
+def test_a_given_zoom_scales_the_states():
+    """The affine's diagonal scales the states: after a 2x zoom (about the origin) the
+    people's boxes are twice as large and still at rest."""
+    tracker = Tracker(TrackerConfig(camera_motion="none"))
+    for _ in range(8):
+        tracker.step(_people())
+    tracks = tracker.step(_people(zoom=2.0), camera_motion=[[2.0, 0, 0], [0, 2.0, 0]])
+    assert np.abs(tracks.velocities).max() < 5.0  # px / s
+    np.testing.assert_allclose(tracks.boxes, _people(zoom=2.0))
+
+
+@pytest.mark.parametrize("motion", [np.eye(2), np.zeros((2, 4)), [[1, 0, np.nan], [0, 1, 0]]])
+def test_camera_motion_must_be_a_finite_2_by_3_matrix(motion):
+    with pytest.raises(ValueError, match="camera_motion must be a finite 2 x 3 affine matrix"):
+        Tracker().step(_people(), camera_motion=motion)
+
+
+def test_the_occlusion_settings_reach_the_occlusion_model():
+    config = TrackerConfig(occlusion="object-wise", occlusion_gain=3.0,
+                           occlusion_ramp=(-0.2, 0.5), occluder_min_existence=0.3)
+    model = Tracker(config).filter.occlusion
+    assert (model.geometry.gain, model.geometry.ramp_zero, model.geometry.ramp_one) == (
+        3.0, -0.2, 0.5)
+    assert model.min_existence == 0.3
+
+
+@pytest.mark.parametrize("box_format", ["xyxy", "ltwh", "cxcywh"])
+def test_moved_tracks_carry_every_corner_along_the_velocity(box_format):
+    """`Tracks.moved`: corners (xyxy) or the left-top point / centre move by v t, sizes stay;
+    nothing is taken from a detection; the rest is kept."""
+    boxes = np.array([[10.0, 20.0, 50.0, 120.0], [300.0, 40.0, 340.0, 150.0]])
+    tracks = Tracks(np.array([4, 9]), boxes, np.array([0.9, 0.8]),
+                    np.array([[30.0, -10.0], [0.0, 6.0]]), np.array([0, -1]),
+                    np.array([0, 2]), np.array([False, True]), box_format)
+    moved = tracks.moved(0.5)
+    step = np.array([[15.0, -5.0], [0.0, 3.0]])
+    expected = boxes + np.c_[step, step if box_format == "xyxy" else np.zeros((2, 2))]
+    np.testing.assert_array_equal(moved.boxes, expected)
+    assert moved.detection_index.tolist() == [-1, -1] and moved.detection_index.dtype == np.int64
+    assert moved.ids.tolist() == [4, 9] and moved.classes.tolist() == [0, 2]
+    assert moved.occluded.tolist() == [False, True] and moved.box_format == box_format
+    np.testing.assert_array_equal(moved.velocities, tracks.velocities)
+    np.testing.assert_array_equal(moved.existence, tracks.existence)
+
+
+def test_update_returns_the_callers_own_boxes_for_detected_tracks():
+    """A track that took a detection returns that detection's row as given, not its round
+    trip through left, top, width, height (which moves a centre by a rounding)."""
+    boxes = np.array([[5.3, 400.7, 41.3, 103.9], [300.1, 500.3, 45.7, 110.3]])
+    assert not np.array_equal(from_ltwh(to_ltwh(boxes, "cxcywh"), "cxcywh"), boxes)
+    tracker = Tracker()
+    for _ in range(4):
+        tracks = tracker.update(boxes, box_format="cxcywh")
+    assert sorted(tracks.detection_index.tolist()) == [0, 1]
+    np.testing.assert_array_equal(tracks.boxes, boxes[tracks.detection_index])

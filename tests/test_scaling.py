@@ -179,6 +179,49 @@ def test_sparse_camera_shift_equals_the_all_pairs_one():
     assert found >= 8
 
 
+def test_sparse_candidates_are_the_all_pairs_ones():
+    """Step 1 of the camera shift on the pairs within reach equals the all-pairs candidates,
+    the same shifts and units in the same order, for people (taller than wide) and cars
+    (wider than tall), on both sides of the origin."""
+    rng = np.random.default_rng(3)
+    for tall in (True, False):
+        size = rng.uniform(20, 120, (150, 2))
+        if not tall:
+            size = size[:, ::-1] * [3.0, 1.0]
+        previous = np.c_[rng.uniform(-400, 400, (150, 2)), size]
+        current = previous + np.c_[rng.normal(0, 15, (150, 2)), rng.normal(0, 3, (150, 2))]
+        candidates, unit = camera.sparse_candidates(previous, current, 1.25)
+        cp = previous[:, :2] + previous[:, 2:] / 2.0
+        cc = current[:, :2] + current[:, 2:] / 2.0
+        scale = np.sqrt(previous[:, None, 3] * current[None, :, 3])
+        ratio = current[None, :, 3] / previous[:, None, 3]
+        shift = cc[None] - cp[:, None]
+        near = (ratio < 1.25) & (ratio > 0.8) & (np.abs(shift).max(axis=-1) < scale)
+        assert near.sum() > 150
+        np.testing.assert_array_equal(candidates, shift[near])
+        np.testing.assert_array_equal(unit, scale[near])
+
+
+@pytest.mark.parametrize("people", [3, 70])  # the all-pairs form, then the sparse one
+def test_camera_shift_needs_min_pairs_and_finds_the_majority(people):
+    """Exactly `min_pairs` (3) boxes that moved alike give their shift, fewer give None; a
+    majority moved by a third of a box height outvotes the rest standing still (the mode
+    radius is 0.05 box heights); integer boxes give what their float values give."""
+    rng = np.random.default_rng(people)
+    spots = np.c_[rng.permutation(np.arange(people) * 60.0), rng.uniform(0, 600, people)]
+    previous = np.c_[spots, np.full(people, 40.0), np.full(people, 100.0)]
+    moved = previous + [30.0, -12.0, 0.0, 0.0]
+    assert camera.estimate_shift(previous, moved).tolist() == [30.0, -12.0]
+    assert camera.estimate_shift(previous[:2], moved[:2]) is None
+    still = np.arange(people) < (people - 3) // 2  # the others, a majority, moved
+    current = np.where(still[:, None], previous, moved)
+    assert camera.estimate_shift(previous, current).tolist() == [30.0, -12.0]
+    assert camera.estimate_shift(previous.astype(int), current.astype(int)).tolist() == [
+        30.0, -12.0]
+    far = previous + [0.0, 5000.0, 0.0, 0.0]  # nobody within reach: no candidate
+    assert camera.estimate_shift(previous, far) is None
+
+
 # -- the tracker ---------------------------------------------------------------------------
 
 

@@ -129,23 +129,32 @@ def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: fl
                      mode_radius: float, min_iou: float, min_pairs: int) -> np.ndarray | None:
     """`estimate_shift` on the pairs that can qualify only; the same result."""
     previous, current = np.asarray(previous, dtype=float), np.asarray(current, dtype=float)
-    hp, hc = previous[:, 3], current[:, 3]
-    cp, cc = _centres(previous), _centres(current)
-    # a qualifying pair moved less than sqrt(hp hc) < sqrt(height_ratio) hp on each axis
-    reach = np.sqrt(height_ratio) * hp * (1.0 + 1e-9) + 1e-9
-    around = np.stack([cp - reach[:, None], cp + reach[:, None]], axis=-1)
-    i, j = overlapping_pairs(around, np.stack([cc, cc], axis=-1))
-    candidates, unit = _candidates(i, j, hp, hc, cp, cc, height_ratio, len(current))
+    candidates, unit = sparse_candidates(previous, current, height_ratio)
     if len(unit) < min_pairs:
         return None
     mode = _mode_shift(candidates, mode_radius * unit)
     moved = previous.copy()
     moved[:, :2] += mode
     p, c = overlapping_pairs(_edges(moved), _edges(current))
-    shifts = _mutual_shifts(p, c, moved, current, cp, cc, min_iou)
+    shifts = _mutual_shifts(p, c, moved, current, _centres(previous), _centres(current),
+                            min_iou)
     if len(shifts) < min_pairs:
         return None
     return _median_rows(shifts)
+
+
+def sparse_candidates(previous: np.ndarray, current: np.ndarray,
+                      height_ratio: float) -> tuple[np.ndarray, np.ndarray]:
+    """Step 1 without testing every pair: the candidate shifts (C, 2) and their units (the
+    geometric mean of the two heights), in the all-pairs order (by previous box, then
+    current); boxes (N, 4) and (M, 4) left, top, width, height as floats."""
+    hp, hc = previous[:, 3], current[:, 3]
+    cp, cc = _centres(previous), _centres(current)
+    # a qualifying pair moved less than sqrt(hp hc) < sqrt(height_ratio) hp on each axis
+    reach = np.sqrt(height_ratio) * hp * (1.0 + 1e-9) + 1e-9
+    around = np.stack([cp - reach[:, None], cp + reach[:, None]], axis=-1)
+    i, j = overlapping_pairs(around, np.stack([cc, cc], axis=-1))
+    return _candidates(i, j, hp, hc, cp, cc, height_ratio, len(current))
 
 
 @njit
