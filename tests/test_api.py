@@ -179,6 +179,19 @@ def test_the_fast_check_of_a_frame_agrees_with_the_full_one_or_defers_to_it():
         assert checked_frame(bad_boxes, bad_scores) is None
     with pytest.raises(ValueError, match="negative width or height"):
         Tracker(TrackerConfig(image_size=(640, 480), fps=30)).step(boxes * [1, 1, 1, -1], scores)
+    # both paths track alike, tiny boxes included: a list (the full checks) and the array
+    people = np.column_stack([rng.uniform(0, 600, (10, 2)), np.tile([40.0, 100.0], (10, 1))])
+    frame, conf = np.r_[boxes, people], np.r_[scores, np.full(10, 0.9)]
+    by_list, by_array = Tracker(), Tracker()
+    for t in range(6):
+        moved = frame + [3.0 * t, 0.0, 0.0, 0.0]
+        a, b = by_list.step(moved.tolist(), conf.tolist()), by_array.step(moved, conf)
+        assert a.ids.tolist() == b.ids.tolist() and np.array_equal(a.boxes, b.boxes)
+        n = by_array.filter.n
+        assert by_list.filter.n == n
+        assert np.array_equal(by_list.filter.mean[:n], by_array.filter.mean[:n])
+        assert np.array_equal(by_list.filter.mass[:n], by_array.filter.mass[:n])
+    assert len(b) >= 8
 
 
 def test_run_refuses_a_file_name_instead_of_iterating_its_characters(tmp_path):

@@ -220,6 +220,9 @@ def test_camera_shift_needs_min_pairs_and_finds_the_majority(people):
         30.0, -12.0]
     far = previous + [0.0, 5000.0, 0.0, 0.0]  # nobody within reach: no candidate
     assert camera.estimate_shift(previous, far) is None
+    # exactly three pairs (the others left, and new people far away came in)
+    current = np.where((np.arange(people) < 3)[:, None], moved, far)
+    assert camera.estimate_shift(previous, current).tolist() == [30.0, -12.0]
 
 
 # -- the tracker ---------------------------------------------------------------------------
