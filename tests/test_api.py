@@ -214,6 +214,21 @@ def test_run_reports_coasting_and_occluded_rows():
     assert result.coasting[gap].all() and not result.coasting[result.frame < 21].any()
 
 
+def test_run_takes_the_scores_of_five_column_frames():
+    """(M, 5) frames carry scores to `step`: `run` gives the rows a loop of `step` with those
+    scores gives, and a low score changes them (a weak box is more likely clutter)."""
+    frames = [np.array([[300.0 + 5 * k, 400.0, 40.0, 120.0, 0.9],
+                        [900.0, 300.0 + 2 * k, 40.0, 110.0, 0.1]]) for k in range(12)]
+    result = Tracker().run(frames)
+    looped, existence = Tracker(), []
+    for frame in frames:
+        existence.extend(looped.step(frame[:, :4], frame[:, 4]).existence)
+    np.testing.assert_array_equal(result.existence, existence)
+    sure = Tracker().run([frame[:, :4] for frame in frames])
+    assert not np.array_equal(sure.existence, result.existence)
+    assert result.frames == 12 and result.seconds_tracking > 0
+
+
 def test_reset_starts_over():
     tracker = Tracker()
     for k in range(5):
