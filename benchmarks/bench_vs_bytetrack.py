@@ -19,7 +19,8 @@ machine hits both alike; the ratios are measured in this one run.
    Tracks reported per frame as a % of the people in view (target 95-105 % for occtrack),
    frames per second of both (target: occtrack at least ByteTrack's at 200 and 400 people),
    and how many times the per-frame time grows from the smallest crowd to the largest
-   (target: at most 10).
+   (target: at most 10); then, per crowd, the share of person-frames whose person was detected
+   in that frame, within the last `report_coast_time` and ever (what any tracker could report).
 """
 
 from __future__ import annotations
@@ -180,7 +181,7 @@ def main() -> None:
         print(f"  per-frame time from {low} to {high} people: occtrack "
               f"{per_frame[high][0] / per_frame[low][0]:.1f} x, ByteTrack "
               f"{per_frame[high][1] / per_frame[low][1]:.1f} x")
-    print("  people-frames (after the first second) detected in that frame / within the "
+    print("  person-frames (after the first second) detected in that frame / within the "
           "report_coast_time before / ever:")
     for count, (now, recent, ever) in shares.items():
         print(f"  {count:>6}{now:>10.1%}{recent:>10.1%}{ever:>10.1%}")
