@@ -229,6 +229,27 @@ def test_run_takes_the_scores_of_five_column_frames():
     assert result.frames == 12 and result.seconds_tracking > 0
 
 
+@pytest.mark.parametrize("frames", [[], [np.zeros((0, 4))] * 3])
+def test_run_of_nothing_gives_typed_empty_columns(frames):
+    """No frame, or frames with no detection: every column empty with the dtype and width of a
+    full result, the frame count and a tracking time."""
+    result = Tracker().run(frames)
+    assert result.frames == len(frames) and 0.0 <= result.seconds_tracking < 60.0
+    for column, dtype, shape in ((result.frame, np.int64, (0,)), (result.id, np.int64, (0,)),
+                                 (result.box, np.float64, (0, 4)),
+                                 (result.existence, np.float64, (0,)),
+                                 (result.coasting, np.bool_, (0,)),
+                                 (result.occluded, np.bool_, (0,))):
+        assert column.dtype == dtype and column.shape == shape
+
+
+def test_run_stops_at_num_frames():
+    frames = [np.array([[300.0 + 5 * k, 400.0, 40.0, 120.0]]) for k in range(10)]
+    result = Tracker().run(frames, num_frames=6)
+    assert result.frames == 6 and result.frame.max() == 6
+    assert Tracker().run(iter(frames), num_frames=6).frame.tolist() == result.frame.tolist()
+
+
 def test_reset_starts_over():
     tracker = Tracker()
     for k in range(5):
