@@ -41,23 +41,19 @@ DEFAULT = TrackerConfig().occlusion  # the crowds run the defaults
 
 def seen_shares(scene, within: int) -> tuple[float, float, float]:
     """Of the person-frames after the first second: the share whose person is detected in
-    that frame (a detection at IoU >= 0.5, one to one), detected within the last `within`
-    frames, and detected at some earlier frame. The last two bound what a tracker that holds a
-    person for `within` frames unseen, or for ever, could report."""
-    from scipy.optimize import linear_sum_assignment
+    that frame (matched one to one at IoU >= 0.5, `occtrack.models.calibration.match`),
+    detected within the last `within` frames, and detected at some earlier frame. The last two
+    bound what a tracker that holds a person for `within` frames unseen, or for ever, could
+    report."""
+    from occtrack.models.calibration import match
 
-    from occtrack.spatial import iou
-
-    truth, det = scene.truth, scene.detections
+    truth = scene.truth
+    detected = match(truth, scene.detections, scene.frames).gt_match >= 0
     last: dict[int, int] = {}
     gaps = []
-    for frame, (rows, found) in enumerate(zip(truth.frame_slices(scene.frames),
-                                              det.frame_slices(scene.frames), strict=True)):
-        if len(rows) and len(found):
-            overlap = iou(truth.box[rows], det.box[found])
-            a, b = linear_sum_assignment(-overlap)
-            for person in truth.id[rows[a[overlap[a, b] >= 0.5]]]:
-                last[int(person)] = frame
+    for frame, rows in enumerate(truth.frame_slices(scene.frames)):
+        for person in truth.id[rows[detected[rows]]]:
+            last[int(person)] = frame
         if frame >= scene.fps:
             gaps.extend(frame - last.get(int(person), -10**9) for person in truth.id[rows])
     gaps = np.asarray(gaps)
