@@ -240,12 +240,15 @@ def pictures_with_a_fifo(folder: Path, frames: int, blocked: int) -> Path:
 
 
 def open_when_read(fifo: Path, process: subprocess.Popen, seconds: float = 120.0) -> int:
-    """Wait until `process` opens `fifo` to read it (so is blocked there), and return our
-    writing end, which we hold open without writing: the reader stays blocked."""
+    """Wait until `process` opens `fifo` to read it, and return our writing end, which we
+    hold open without writing: the reader stays blocked. Returns once the reader sleeps in
+    its read: a SIGINT that came earlier, between its open and its read, would only be marked
+    by Python's handler (which runs between bytecodes) and the read would block for good."""
     deadline = time.monotonic() + seconds
     while True:
         try:
-            return os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+            fd = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+            break
         except OSError as err:
             assert err.errno == errno.ENXIO, err  # no reader yet
         if process.poll() is not None:
@@ -254,6 +257,21 @@ def open_when_read(fifo: Path, process: subprocess.Popen, seconds: float = 120.0
                         f"\n{out}{err}")
         assert time.monotonic() < deadline, "the run never reached the FIFO"
         time.sleep(0.01)
+    while not sleeping(process.pid):
+        assert time.monotonic() < deadline, "the run never blocked in its read"
+        time.sleep(0.001)
+    return fd
+
+
+def sleeping(pid: int) -> bool:
+    """Whether the main thread of `pid` sleeps (waits in a system call); without /proc (not
+    Linux), True after a pause long enough for the reader to reach its read."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        time.sleep(0.5)
+        return True
+    return stat.rsplit(")", 1)[1].split()[0] == "S"
 
 
 @pytest.mark.parametrize("old", [True, False], ids=["old-file", "no-file"])
