@@ -4,6 +4,7 @@ occlusion flags, and clear errors for bad input."""
 
 from __future__ import annotations
 
+import io
 import subprocess
 import sys
 
@@ -12,7 +13,8 @@ import pytest
 
 import occtrack
 from occtrack import Tracker, TrackerConfig, Tracks
-from occtrack.tracker.boxes import checked_frame, from_ltwh, to_ltwh
+from occtrack.io.mot import MotTable
+from occtrack.tracker.boxes import check_classes, check_time, checked_frame, from_ltwh, to_ltwh
 
 
 def walkers(frames: int = 40, speed: float = 150.0, fps: float = 30.0) -> list[np.ndarray]:
@@ -201,8 +203,44 @@ def test_run_refuses_a_file_name_instead_of_iterating_its_characters(tmp_path):
             tracker.run(name)
     with pytest.raises(ValueError, match="MotTable"):
         tracker.run(42)
-    with pytest.raises(ValueError, match="frame 2"):
+    with pytest.raises(ValueError, match=r"^frame 2: detections must be an array of numbers "
+                                         r"\(M, 4\) or \(M, 5\), not the string '1,2,3,4'$"):
         tracker.run([np.zeros((0, 4)), "1,2,3,4"])
+    with pytest.raises(ValueError, match=r"not the string '(x){40}'$"):  # its start only
+        tracker.run(["x" * 60])
+    with pytest.raises(ValueError, match=r"^frame 1: detections must be \(M, 4\) or \(M, 5\),"
+                                         r" not \(2, 3\)$"):
+        tracker.run([np.zeros((2, 3))])
+
+
+class Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_run_shows_its_progress_with_the_frame_count_on_a_terminal_when_asked(monkeypatch):
+    """The bar counts frames out of the total: a list's length, a MotTable's frames (not its
+    rows), num_frames when given; a stream of unknown length is only counted. Quiet by
+    default (a library call), and never a bar off a terminal."""
+    frames = [np.array([[300.0 + 5 * k, 400.0, 40.0, 120.0]] * 2) for k in range(4)]
+    table = MotTable(np.repeat(np.arange(1, 5), 2), np.full(8, -1), np.concatenate(frames),
+                     np.ones(8), np.full(8, -1), np.full(8, -1.0))
+
+    def shown(detections, **kwargs) -> str:
+        stderr = Terminal()
+        monkeypatch.setattr("sys.stderr", stderr)
+        Tracker().run(detections, **kwargs)
+        return stderr.getvalue()
+
+    assert shown(frames) == ""
+    assert "tracking:" in shown(frames, quiet=False) and "0/4" in shown(frames, quiet=False)
+    assert "0/4" in shown(table, quiet=False) and "/8" not in shown(table, quiet=False)
+    assert "0/3" in shown(table, num_frames=3, quiet=False)
+    stream = shown(iter(frames), quiet=False, desc="scoring")
+    assert "scoring: 0it" in stream and "tracking" not in stream and "0/" not in stream
+    monkeypatch.setattr("sys.stderr", io.StringIO())
+    Tracker().run(frames, quiet=False)
+    assert sys.stderr.getvalue() == ""
 
 
 def test_run_reports_coasting_and_occluded_rows():
@@ -248,6 +286,52 @@ def test_run_stops_at_num_frames():
     result = Tracker().run(frames, num_frames=6)
     assert result.frames == 6 and result.frame.max() == 6
     assert Tracker().run(iter(frames), num_frames=6).frame.tolist() == result.frame.tolist()
+
+
+def test_boxes_thinner_than_a_pixel_are_taken_as_one_pixel_wide():
+    """Zero and sub-pixel sizes are not negative: both check paths (a list, an array) accept
+    them and track the box as 1 px wide or tall."""
+    boxes = [[100.0, 100.0, 0.0, 80.0], [300.0, 100.0, 0.5, 0.0], [500.0, 100.0, 40.0, 90.0]]
+    np.testing.assert_array_equal(to_ltwh(boxes, "ltwh"), boxes)
+    by_list, by_array = Tracker(), Tracker()
+    for _ in range(3):
+        a, b = by_list.step(boxes, [0.9] * 3), by_array.step(np.array(boxes), np.full(3, 0.9))
+        assert a.ids.tolist() == b.ids.tolist() and np.array_equal(a.boxes, b.boxes)
+    n = by_list.filter.n
+    np.testing.assert_array_equal(by_list.filter.mean[:n], by_array.filter.mean[:n])
+    assert len(a) == 3
+
+
+def test_classes_and_times_at_the_boundary():
+    """Whole-number floats (YOLO's classes) become int64 ids, up to 2**62 in size (beyond it a
+    float is no longer a safe id); times come as any real scalar, a 0-d array included."""
+    assert check_classes([0.0, 200.0, -3.0], 3).tolist() == [0, 200, -3]
+    assert check_classes([0.0, 200.0, -3.0], 3).dtype == np.int64
+    assert check_classes([2.0**62 - 2.0**10], 1).tolist() == [2**62 - 2**10]
+    for big in (2.0**62, -(2.0**62), 2.0**63):
+        with pytest.raises(ValueError, match="whole numbers"):
+            check_classes([big], 1)
+    assert check_time(np.array(0.25), "dt") == 0.25 and check_time(np.float32(0.5), "dt") == 0.5
+    with pytest.raises(ValueError, match="dt must be a number of seconds"):
+        check_time(np.array([0.25, 0.5]), "dt")
+
+
+def test_from_ltwh_gives_floats_in_every_format():
+    for box_format, expected in (("xyxy", [1.0, 2.0, 4.0, 6.0]), ("ltwh", [1.0, 2.0, 3.0, 4.0]),
+                                 ("cxcywh", [2.5, 4.0, 3.0, 4.0])):
+        out = from_ltwh([[1, 2, 3, 4]], box_format)
+        assert out.dtype == np.float64 and out.tolist() == [expected]
+
+
+def test_tracks_in_another_format_keep_every_other_field():
+    tracker = Tracker()
+    for k in range(3):
+        tracks = tracker.update([[100.0 + 6 * k, 100.0, 140.0 + 6 * k, 220.0]], [0.9])
+    other = tracks.in_format("cxcywh")
+    assert other.box_format == "cxcywh" and other.boxes.tolist() == [[132.0, 160.0, 40.0, 120.0]]
+    for name in ("ids", "existence", "velocities", "detection_index", "classes", "occluded"):
+        np.testing.assert_array_equal(getattr(other, name), getattr(tracks, name))
+    assert tracks.in_format("xyxy") is tracks
 
 
 def test_reset_starts_over():

@@ -157,9 +157,14 @@ def test_pair_likelihoods_and_box_update_equal_the_general_forms():
         np.testing.assert_array_equal(got, expected)  # the same numbers, the rest untouched
 
 
-def test_sparse_camera_shift_equals_the_all_pairs_one():
+@pytest.mark.parametrize("wide", [False, True], ids=["people", "cars"])
+def test_sparse_camera_shift_equals_the_all_pairs_one(wide):
+    """On boxes taller than wide (people) and wider than tall (each box w, h made 2h, h / 2:
+    cars), for every frame pair of a crowd, with a random camera shift."""
     scene = crowd_scene(crowd(120, 12), seed=5)
     frames = frames_of(scene)
+    if wide:
+        frames = [(np.c_[b[:, :2], 2.0 * b[:, 3], 0.5 * b[:, 3]], s) for b, s in frames]
     rng = np.random.default_rng(0)
     found = 0
     for (previous, _), (current, _) in zip(frames, frames[1:], strict=False):
@@ -177,6 +182,15 @@ def test_sparse_camera_shift_equals_the_all_pairs_one():
             found += 1
             np.testing.assert_array_equal(sparse, dense)
     assert found >= 8
+
+
+def test_the_camera_pairs_boxes_by_their_own_extent_on_each_axis():
+    """The edges the sparse pairing overlaps are each box's own: a car 120 px wide and 20 tall
+    moved 35 px along (IoU 0.55) pairs with itself, though it moved more than its height."""
+    box = np.array([[100.0, 50.0, 120.0, 20.0]])
+    np.testing.assert_array_equal(camera._edges(box), [[[100.0, 220.0], [50.0, 70.0]]])
+    p, c = spatial.overlapping_pairs(camera._edges(box), camera._edges(box + [35, 0, 0, 0]))
+    assert p.tolist() == [0] and c.tolist() == [0]
 
 
 def test_sparse_candidates_are_the_all_pairs_ones():
@@ -218,6 +232,9 @@ def test_camera_shift_needs_min_pairs_and_finds_the_majority(people):
     assert camera.estimate_shift(previous, current).tolist() == [30.0, -12.0]
     assert camera.estimate_shift(previous.astype(int), current.astype(int)).tolist() == [
         30.0, -12.0]
+    grown = moved * [1.0, 1.0, 1.0, 1.3]  # heights changed by more than height_ratio 1.25
+    assert camera.estimate_shift(previous, grown) is None
+    assert camera.estimate_shift(previous, grown, height_ratio=1.35) is not None
     far = previous + [0.0, 5000.0, 0.0, 0.0]  # nobody within reach: no candidate
     assert camera.estimate_shift(previous, far) is None
     # exactly three pairs (the others left, and new people far away came in)
