@@ -127,6 +127,7 @@ def prepare(workdir: Path, only_mutate: list[str], tests: list[str]) -> None:
 def run_mutmut(workdir: Path, max_children: int, budget: float | None) -> bool:
     """Run `mutmut run`; True if it finished, False if the budget stopped it."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # mutmut sets the path
+    env["OCCTRACK_HYPOTHESIS_PROFILE"] = "mutation"  # no shrinking (tests/conftest.py)
     command = [mutmut_executable(), "run", "--max-children", str(max_children)]
     with open(workdir / "mutmut-run.log", "a") as log:
         proc = subprocess.Popen(command, cwd=workdir, env=env, stdout=log,

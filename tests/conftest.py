@@ -4,7 +4,11 @@ Data-dependent tests look where the commands look: `OCCTRACK_DATA`, else `../sha
 beside this checkout (never an absolute path). Without the data a test skips on a developer's
 machine, but fails in CI (`CI=true`): a CI run that quietly tested nothing must not pass.
 Tests of optional extras (norfair's environment, `pytest.importorskip`) still skip, with a
-reason, everywhere."""
+reason, everywhere.
+
+`OCCTRACK_HYPOTHESIS_PROFILE=mutation` (set by benchmarks/mutation.py) turns hypothesis's
+shrinking off: a planted fault fails a property test at once, and shrinking the failing example
+could take minutes, past mutmut's timeout."""
 
 from __future__ import annotations
 
@@ -17,6 +21,14 @@ from occtrack.errors import OcctrackError
 from occtrack.io.data import SEQUENCE, find_sequence
 
 CHECKOUT = Path(__file__).resolve().parents[1]
+
+try:
+    from hypothesis import Phase, settings
+except ImportError:  # the test extra is not installed: the property tests skip
+    pass
+else:
+    settings.register_profile("mutation", phases=[Phase.explicit, Phase.reuse, Phase.generate])
+    settings.load_profile(os.environ.get("OCCTRACK_HYPOTHESIS_PROFILE", "default"))
 
 
 def in_ci() -> bool:

@@ -153,8 +153,10 @@ def test_update_rejects_bad_input_with_clear_messages():
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=message):
             tracker.update(**kwargs)
+    with pytest.raises(ValueError, match=r"boxes must have shape \(M, 4\) .* not \(1,\)$"):
+        tracker.update([5.0])
     assert tracker.filter.steps == 0  # nothing was tracked by a refused call
-    assert len(tracker.update(np.zeros((0, 4)))) == 0
+    assert len(tracker.update(np.zeros((0, 4)))) == 0 and len(tracker.update([])) == 0
     with pytest.raises(ValueError, match="TrackerConfig"):
         Tracker({"fps": 30})
 
@@ -390,6 +392,9 @@ def test_a_given_zoom_scales_the_states():
 def test_camera_motion_must_be_a_finite_2_by_3_matrix(motion):
     with pytest.raises(ValueError, match="camera_motion must be a finite 2 x 3 affine matrix"):
         Tracker().step(_people(), camera_motion=motion)
+    for words in ("shift", [["a", "b", "c"], ["d", "e", "f"]]):
+        with pytest.raises(ValueError, match=r"camera_motion must be an array of numbers \(a 2 x"):
+            Tracker().step(_people(), camera_motion=words)
 
 
 def test_the_occlusion_settings_reach_the_occlusion_model():

@@ -193,6 +193,21 @@ def test_the_camera_pairs_boxes_by_their_own_extent_on_each_axis():
     assert p.tolist() == [0] and c.tolist() == [0]
 
 
+@pytest.mark.parametrize("hp", [100.0, 0.01])
+def test_sparse_candidates_reach_the_edge_of_what_qualifies(hp):
+    """A pair that only just qualifies (a height ratio and a move each a hair below their
+    bounds, along either axis, either way) is a candidate: the sweep's reach has a margin,
+    relative for boxes of pixels and absolute for boxes below a pixel."""
+    hc = 1.25 * hp * (1 - 1e-12)
+    d = np.sqrt(hp * hc) * (1 - 1e-12)
+    previous = np.array([[0.0, 0.0, 40.0, hp]])
+    for step in ([d, 0.0], [-d, 0.0], [0.0, d], [0.0, -d]):
+        current = np.array([[step[0], hp / 2 - hc / 2 + step[1], 40.0, hc]])
+        candidates, unit = camera.sparse_candidates(previous, current, 1.25)
+        np.testing.assert_allclose(candidates, [step], rtol=1e-9, atol=1e-13)
+        np.testing.assert_allclose(unit, [d], rtol=1e-9)
+
+
 def test_sparse_candidates_are_the_all_pairs_ones():
     """Step 1 of the camera shift on the pairs within reach equals the all-pairs candidates,
     the same shifts and units in the same order, for people (taller than wide) and cars
@@ -240,6 +255,10 @@ def test_camera_shift_needs_min_pairs_and_finds_the_majority(people):
     # exactly three pairs (the others left, and new people far away came in)
     current = np.where((np.arange(people) < 3)[:, None], moved, far)
     assert camera.estimate_shift(previous, current).tolist() == [30.0, -12.0]
+    apart = previous * [20.0, 1.0, 1.0, 1.0]  # 1200 px apart: exactly three candidates too
+    current = np.where((np.arange(people) < 3)[:, None], apart + [30.0, -12.0, 0.0, 0.0],
+                       apart + [0.0, 5000.0, 0.0, 0.0])
+    assert camera.estimate_shift(apart, current).tolist() == [30.0, -12.0]
 
 
 # -- the tracker ---------------------------------------------------------------------------
@@ -278,6 +297,8 @@ def test_a_crowd_of_150_is_reported_whole_with_the_default_capacity():
     assert 0.9 * 150 <= np.mean(shown[15:]) <= 1.05 * 150
     assert tracker.filter.slot_used.sum() >= 140
     assert len(tracker._report_id) == len(tracker.filter.slot_used)
+    ids = tracker.tracks().ids  # whole numbers still, after the label slots grew
+    assert ids.dtype == np.int64 and len(np.unique(ids)) == len(ids)
 
 
 @pytest.mark.parametrize("setting,limit,pattern", [

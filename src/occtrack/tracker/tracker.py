@@ -239,7 +239,7 @@ class Tracker:
                 raise ValueError(f"dt must be a positive number of seconds, not {dt}")
         camera = None
         if camera_motion is not None:
-            affine = np.asarray(camera_motion, dtype=float)
+            affine = as_array(camera_motion, "camera_motion", "(a 2 x 3 affine matrix)")
             if affine.shape != (2, 3) or not np.isfinite(affine).all():
                 raise ValueError("camera_motion must be a finite 2 x 3 affine matrix")
             camera = (np.diag(affine[:, :2]).copy(), affine[:, 2].copy())
