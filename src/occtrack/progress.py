@@ -1,4 +1,10 @@
-"""Progress bars for long work: a bar on a terminal, silent with --quiet or when not a tty."""
+"""Progress bars for long work: a bar on a terminal, silent with --quiet or when not a tty.
+
+No thread is started, bar or no bar: a silent run does not touch tqdm, and the bar runs
+without tqdm's monitor thread (which only retunes how often a bar redraws; with miniters=1 the
+bar reads the clock at every item instead). A library call such as `Tracker.run` then leaves
+nothing running behind it, and a process forked afterwards (a multiprocessing worker, mutmut's
+runs) inherits no lock that such a thread held at the fork."""
 
 from __future__ import annotations
 
@@ -11,11 +17,16 @@ T = TypeVar("T")
 
 def progress(items: Iterable[T], total: int | None = None, desc: str = "",
              quiet: bool = False) -> Iterator[T]:
+    if quiet or not sys.stderr.isatty():
+        yield from items
+        return
     from tqdm import tqdm
 
-    disable = quiet or not sys.stderr.isatty()
-    yield from tqdm(items, total=total, desc=desc, disable=disable, leave=False,
-                    file=sys.stderr, dynamic_ncols=True)
+    class Bar(tqdm):
+        monitor_interval = 0
+
+    yield from Bar(items, total=total, desc=desc, leave=False, file=sys.stderr,
+                   dynamic_ncols=True, miniters=1)
 
 
 def summary(frames: int, tracks: int, seconds: float, what: str = "frames") -> str:
