@@ -83,6 +83,7 @@ GROUPS = {
                  *(f"test_scaling.py::test_{name}" for name in (
                      "sparse_camera_shift_equals_the_all_pairs_one",
                      "sparse_candidates_are_the_all_pairs_ones",
+                     "sparse_candidates_reach_the_edge_of_what_qualifies",
                      "the_camera_pairs_boxes_by_their_own_extent_on_each_axis",
                      "camera_shift_needs_min_pairs_and_finds_the_majority",
                      "gated_and_ungated_runs_give_the_same_tracks",

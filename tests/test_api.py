@@ -142,6 +142,8 @@ def test_update_rejects_bad_input_with_clear_messages():
         (dict(boxes=np.zeros((3, 5))), r"shape \(M, 4\)"),
         (dict(boxes=[[1, 2, np.nan, 4]]), "NaN"),
         (dict(boxes=[[10, 10, 5, 20]]), "x2 < x1"),
+        (dict(boxes=[[10, 10, 10, 30], [10, 10, 5, 20]]),  # the first box only zero wide
+         r"^box 1 \[10\.0, 10\.0, 5\.0, 20\.0\] has x2 < x1"),
         (dict(boxes=[[10, 10, 5, 20]], box_format="xywh"), "box_format"),
         (dict(boxes=[[10, 10, 20, 20]], scores=[0.5, 0.6]), "scores"),
         (dict(boxes=[[10, 10, 20, 20]], classes=[0.5]), "whole numbers"),
@@ -295,6 +297,8 @@ def test_boxes_thinner_than_a_pixel_are_taken_as_one_pixel_wide():
     them and track the box as 1 px wide or tall."""
     boxes = [[100.0, 100.0, 0.0, 80.0], [300.0, 100.0, 0.5, 0.0], [500.0, 100.0, 40.0, 90.0]]
     np.testing.assert_array_equal(to_ltwh(boxes, "ltwh"), boxes)
+    corners = [[100.0, 100.0, 100.0, 180.0], [300.0, 100.0, 300.5, 100.0]]
+    np.testing.assert_array_equal(to_ltwh(corners, "xyxy"), boxes[:2])
     by_list, by_array = Tracker(), Tracker()
     for _ in range(3):
         a, b = by_list.step(boxes, [0.9] * 3), by_array.step(np.array(boxes), np.full(3, 0.9))
@@ -326,14 +330,17 @@ def test_from_ltwh_gives_floats_in_every_format():
 
 
 def test_tracks_in_another_format_keep_every_other_field():
+    """`step`'s own tracks (ltwh; `update` converts with in_format itself) in another format:
+    only the boxes change."""
     tracker = Tracker()
     for k in range(3):
-        tracks = tracker.update([[100.0 + 6 * k, 100.0, 140.0 + 6 * k, 220.0]], [0.9])
+        tracks = tracker.step(np.array([[100.0 + 6 * k, 100.0, 40.0, 120.0]]), np.array([0.9]))
     other = tracks.in_format("cxcywh")
     assert other.box_format == "cxcywh" and other.boxes.tolist() == [[132.0, 160.0, 40.0, 120.0]]
+    assert tracks.velocities.shape == (1, 2) and tracks.velocities[0, 0] > 0
     for name in ("ids", "existence", "velocities", "detection_index", "classes", "occluded"):
         np.testing.assert_array_equal(getattr(other, name), getattr(tracks, name))
-    assert tracks.in_format("xyxy") is tracks
+    assert tracks.in_format("ltwh") is tracks
 
 
 def test_reset_starts_over():

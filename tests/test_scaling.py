@@ -157,10 +157,16 @@ def test_pair_likelihoods_and_box_update_equal_the_general_forms():
         np.testing.assert_array_equal(got, expected)  # the same numbers, the rest untouched
 
 
+def same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    return (a is None and b is None) or (a is not None and b is not None
+                                         and np.array_equal(a, b))
+
+
 @pytest.mark.parametrize("wide", [False, True], ids=["people", "cars"])
 def test_sparse_camera_shift_equals_the_all_pairs_one(wide):
     """On boxes taller than wide (people) and wider than tall (each box w, h made 2h, h / 2:
-    cars), for every frame pair of a crowd, with a random camera shift."""
+    cars), for every frame pair of a crowd, with a random camera shift; float32 boxes give
+    what their float64 values give (the estimate is computed in float64), in both forms."""
     scene = crowd_scene(crowd(120, 12), seed=5)
     frames = frames_of(scene)
     if wide:
@@ -171,10 +177,14 @@ def test_sparse_camera_shift_equals_the_all_pairs_one(wide):
         current = current + np.append(rng.normal(0, 6, 2), [0, 0])
         assert len(previous) * len(current) > spatial.DENSE_PAIRS
         sparse = camera.estimate_shift(previous, current)
+        single = previous.astype(np.float32), current.astype(np.float32)  # a detector's
+        widened = [a.astype(float) for a in single]
+        assert same(camera.estimate_shift(*single), camera.estimate_shift(*widened))
         old = camera.DENSE_PAIRS
         try:
             camera.DENSE_PAIRS = 10**12  # every pair of boxes
             dense = camera.estimate_shift(previous, current)
+            assert same(camera.estimate_shift(*single), camera.estimate_shift(*widened))
         finally:
             camera.DENSE_PAIRS = old
         assert (sparse is None) == (dense is None)
