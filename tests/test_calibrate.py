@@ -53,6 +53,8 @@ from occtrack.models.calibration import (
     calibrate,
     match,
     poisson_power_fit,
+    proportion,
+    rate,
     report_lines,
     to_toml,
 )
@@ -540,6 +542,8 @@ def test_one_person_always_detected_gives_no_interval_and_sets_only_the_detectab
         assert (e.value, e.low, e.high, e.n) == (1.0, 0.0, 1.0, n)
     assert math.isnan(cal.detection_memory.value) and cal.detection_memory.n == 29
     assert math.isnan(cal.detectability_ratio.value)
+    for e in (cal.detection_memory, cal.detectability_ratio):
+        assert math.isnan(e.low) and math.isnan(e.high)
     assert (cal.false_per_frame.value, cal.false_per_frame.low) == (0.0, 0.0)
     assert cal.false_per_frame.high == math.inf
     assert cal.clutter_rate.value == 0.0 and math.isnan(cal.clutter_score_power.value)
@@ -643,6 +647,39 @@ def test_interval_helpers_on_hand_worked_input():
     assert _bootstrap_weights(0, np.random.default_rng(0)).shape == (BOOTSTRAP, 0)
     counts = _bootstrap_weights(3, np.random.default_rng(0))
     assert counts.shape == (BOOTSTRAP, 3) and np.all(counts.sum(axis=1) == 3)
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_rate_and_proportion_design_effects_by_hand():
+    """The design effect deff = max(1, bootstrap variance / the Poisson or binomial one) times
+    the inflation of the number of clusters squared; the effective count is the count over
+    deff. One bootstrap draw has no variance (0, not a warning); one block of frames bounds
+    nothing above."""
+    grow = _inflation(2) ** 2
+    # rate, 30 events in 30 frames over two blocks of 15: r = 1, Poisson variance 1 / 30
+    counts, blocks = np.array([[0], [30]]), np.array([15.0, 15.0])
+    one_draw = rate(counts, 30.0, np.array([[1, 1]]), blocks)[0]
+    assert one_draw.value == 1.0 and one_draw.n == 30
+    assert one_draw.effective == pytest.approx(30 / grow, rel=1e-12)
+    # two draws, each one block twice: rates 0 and 2, variance 2, deff 60 grow
+    two = rate(counts, 30.0, np.array([[2, 0], [0, 2]]), blocks)[0]
+    assert two.effective == pytest.approx(30 / (60 * grow), rel=1e-12)
+    assert rate(np.array([[5]]), 10.0, np.ones((4, 1)), np.array([10.0])) == [
+        Estimate(0.5, 0.0, math.inf, 5, 0.0)]
+    # proportion, 3 clusters: hits 2, 2, 3 of 2, 4, 6 (p = 7 / 12)
+    hits, totals = np.array([[2], [2], [3]]), np.array([[2], [4], [6]])
+    binomial = (7 / 12) * (5 / 12) / 12
+    grow3 = _inflation(3) ** 2
+    one = proportion(hits, totals, np.array([[1, 1, 1]]))[0]
+    assert one.value == pytest.approx(7 / 12, rel=1e-12) and one.n == 12
+    assert one.effective == pytest.approx(12 / grow3, rel=1e-12)
+    # two draws: clusters 1 and 2 three times each, proportions 1 and 1/2, variance 1/8
+    two = proportion(hits, totals, np.array([[3, 0, 0], [0, 3, 0]]))[0]
+    assert two.effective == pytest.approx(12 / (0.125 / binomial * grow3), rel=1e-12)
+    # clusters of one row each, drawn singly: proportions 1, 0, 1 (variance 1/3)
+    single = proportion(np.array([[1], [0], [1]]), np.ones((3, 1), int), np.eye(3))[0]
+    binomial = (2 / 3) * (1 / 3) / 3
+    assert single.effective == pytest.approx(3 / (1 / 3 / binomial * grow3), rel=1e-12)
 
 
 def test_binning_sizes_and_score_centres():
