@@ -143,19 +143,26 @@ def test_detection_and_clutter_curves_are_recovered_bin_by_bin(simulated):
 
 
 def test_power_law_fit_is_exact_on_its_own_model():
-    """False counts exactly c s^-p times their exposure: the fit returns c and p."""
+    """False counts exactly c s^-p times their exposure: the fit returns c and p, whatever
+    the exposure's scale (a total exposure below one included)."""
     centres = np.array([0.3, 0.7, 0.95, 0.995, 0.9995])
     hits = np.array([50.0, 100.0, 400.0, 800.0, 20000.0])
+    for frames, area in ((1000.0, 2.0), (1.0, 0.5)):
+        for c, p in ((0.02, 2.5), (0.5, 0.7)):
+            exposure = frames * area * hits / hits.sum()
+            counts = exposure * c * centres ** -p
+            got_c, got_p = poisson_power_fit(counts, hits, frames, area, centres)
+            assert got_c[0] == pytest.approx(c, rel=1e-6)
+            assert got_p[0] == pytest.approx(p, rel=1e-6)
     frames, area = 1000.0, 2.0
-    for c, p in ((0.02, 2.5), (0.5, 0.7)):
-        exposure = frames * area * hits / hits.sum()
-        counts = exposure * c * centres ** -p
-        got_c, got_p = poisson_power_fit(counts, hits, frames, area, centres)
-        assert got_c[0] == pytest.approx(c, rel=1e-6)
-        assert got_p[0] == pytest.approx(p, rel=1e-6)
     # no false detection at all: no clutter
     got_c, _ = poisson_power_fit(np.zeros(5), hits, frames, area, centres)
     assert got_c[0] == 0.0
+    # hits in one bin only: no slope can be told, the flat rate with p = 0
+    single = np.array([0.0, 0.0, 400.0, 0.0, 0.0])
+    got_c, got_p = poisson_power_fit(np.array([0.0, 0.0, 6.0, 0.0, 0.0]), single, frames, area,
+                                     centres)
+    assert got_c[0] == pytest.approx(6.0 / (frames * area), rel=1e-12) and got_p[0] == 0.0
     # one false detection, in the bin with a single hit: all of it is there (share 1/21351)
     one_hit = np.array([0.0, 1.0, 400.0, 800.0, 20000.0])
     got_c, got_p = poisson_power_fit(np.array([0.0, 1.0, 0, 0, 0]), one_hit, frames, area,
