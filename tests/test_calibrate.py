@@ -44,6 +44,7 @@ from occtrack.models.calibration import (
     Labelled,
     _bins,
     _bootstrap_weights,
+    _edge_noise,
     _inflation,
     _percentile,
     _recently_detected,
@@ -654,6 +655,60 @@ def test_interval_helpers_on_hand_worked_input():
     assert _bootstrap_weights(0, np.random.default_rng(0)).shape == (BOOTSTRAP, 0)
     counts = _bootstrap_weights(3, np.random.default_rng(0))
     assert counts.shape == (BOOTSTRAP, 3) and np.all(counts.sum(axis=1) == 3)
+
+
+def _std_and_draws(values, cluster, n_clusters, weights):
+    """The sample standard deviation of `values` and its cluster-bootstrap draws, from the
+    per-cluster count, sum and sum of squares."""
+    k = np.zeros((n_clusters, 3))
+    for j, v in enumerate((np.ones_like(values), values, values * values)):
+        np.add.at(k[:, j], cluster, v)
+    boot = weights @ k
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = boot[:, 1] / boot[:, 0]
+        draws = np.sqrt(np.maximum(boot[:, 2] / boot[:, 0] - mean ** 2, 0.0) * boot[:, 0]
+                        / np.maximum(boot[:, 0] - 1, 1))
+    return float(np.std(values, ddof=1)), draws, mean
+
+
+def test_edge_intervals_count_the_people_with_rows_and_stds_stay_positive():
+    """Three people: four rows of one, one of another (its left edge only measured), none of
+    the third. The intervals are widened for the people with rows (two, not three, nor the
+    one with several rows), and a standard deviation's interval is cut at 0 where the
+    widening would pass it."""
+    cluster = np.array([0, 0, 0, 0, 1])
+    err = np.array([[1.0], [-1.0], [3.0], [-2.0], [0.5]]) * np.ones((1, 4))
+    height = np.full(5, 100.0)
+    size = np.tile([40.0, 100.0, 40.0, 100.0], (5, 1))
+    valid = np.ones((5, 4), bool)
+    valid[4, 1:] = False
+    weights = _bootstrap_weights(3, np.random.default_rng(0))
+    out = _edge_noise(cluster, err, height, size, valid, 3, weights)
+    rel = err[:, 0] / 100.0
+    sd, draws, means = _std_and_draws(rel, cluster, 3, weights)
+    std = out["edge_std"]["left"]
+    assert std.value == pytest.approx(sd, rel=1e-12) and std.n == 5
+    expected = _percentile(sd, draws, 5, 2, (0.0, math.inf))
+    assert (std.low, std.high) == (pytest.approx(expected.low, rel=1e-9),
+                                   pytest.approx(expected.high, rel=1e-9))
+    assert std.low == 0.0 and _percentile(sd, draws, 5, 2).low < 0.0  # the cut at 0 bites
+    assert out["edge_std_own"]["left"].low == 0.0
+    bias = out["edge_bias"]["left"]
+    assert bias.value == pytest.approx(rel.mean(), rel=1e-12)
+    assert bias.high == pytest.approx(_percentile(rel.mean(), means, 5, 2).high, rel=1e-9)
+    top = out["edge_std"]["top"]  # one person's rows only: no spread to resample
+    assert top.n == 4 and (top.low, top.high) == (0.0, math.inf)
+    # pooled over the four edges, each about its own bias: 5 + 3 x 4 rows of two people
+    centred = np.r_[rel - rel.mean(), np.tile(rel[:4] - rel[:4].mean(), 3)]
+    who = np.r_[cluster, np.tile(cluster[:4], 3)]
+    k = np.zeros((3, 3))
+    for j, v in enumerate((np.ones_like(centred), centred, centred * centred)):
+        np.add.at(k[:, j], who, v)
+    sd = math.sqrt(k[:, 2].sum() / 16)  # about 0: the sum of squares over 17 - 1
+    _, draws, _ = _std_and_draws(centred, who, 3, weights)
+    noise = out["edge_noise"]
+    assert noise.value == pytest.approx(sd, rel=1e-9) and noise.n == 17 and noise.low == 0.0
+    assert noise.high == pytest.approx(_percentile(sd, draws, 17, 2).high, rel=1e-9)
 
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
