@@ -141,6 +141,9 @@ def test_detection_and_clutter_curves_are_recovered_bin_by_bin(simulated):
     values = [e.value for _, _, e in cal.by_visibility]
     assert values == sorted(values)
     assert cal.by_score[1][2].value > cal.by_score[2][2].value
+    # so the fitted clutter power is positive, each point estimate inside its interval
+    for e in (cal.clutter_rate, cal.clutter_score_power):
+        assert 0.0 < e.low < e.value < e.high < math.inf, e
 
 
 def test_power_law_fit_is_exact_on_its_own_model():
@@ -611,6 +614,18 @@ def test_edges_with_fewer_than_two_rows_have_no_estimate():
     assert cal.edge_noise.n == 2
     assert cal.edge_noise.value == pytest.approx(10 / math.sqrt(2) / 1080, rel=1e-12)
     assert cal.edge_noise.low == 0.0
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_memory_with_one_person_always_detected_and_one_never():
+    """After a hit always a hit, after a miss always a miss: lambda 1, half-second ratio 0.
+    The bootstrap draws that take one person twice have no pairs after a hit (or after a
+    miss): their 0 / 0 is dropped quietly, not warned about."""
+    frames = 40
+    cal = _two_people(frames, [100.0, 100.0, 80.0, 200.0], [900.0, 400.0, 80.0, 200.0],
+                      np.ones(frames, bool), np.zeros(frames, bool))
+    assert (cal.detection_memory.value, cal.detection_memory.n) == (1.0, 78)
+    assert cal.detectability_ratio.value == 0.0
 
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
