@@ -123,6 +123,10 @@ def test_headline_parameters_are_recovered_within_their_intervals(simulated):
     # the tracker's unit is the box height: top and bottom are edge_noise_y there
     assert cal.edge_std["top"].covers(CONFIG.edge_noise_y)
     assert cal.detection_overall.high - cal.detection_overall.low < 0.15
+    # clutter falls with the score as simulated (no power law, so no true c and p): the
+    # fitted power is positive, each point estimate inside its interval
+    for e in (cal.clutter_rate, cal.clutter_score_power):
+        assert 0.0 < e.low < e.value < e.high < math.inf, e
 
 
 def test_detection_and_clutter_curves_are_recovered_bin_by_bin(simulated):
@@ -141,9 +145,6 @@ def test_detection_and_clutter_curves_are_recovered_bin_by_bin(simulated):
     values = [e.value for _, _, e in cal.by_visibility]
     assert values == sorted(values)
     assert cal.by_score[1][2].value > cal.by_score[2][2].value
-    # so the fitted clutter power is positive, each point estimate inside its interval
-    for e in (cal.clutter_rate, cal.clutter_score_power):
-        assert 0.0 < e.low < e.value < e.high < math.inf, e
 
 
 def test_power_law_fit_is_exact_on_its_own_model():
