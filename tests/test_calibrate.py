@@ -689,9 +689,9 @@ def _std_and_draws(values, cluster, n_clusters, weights):
 
 def test_edge_intervals_count_the_people_with_rows_and_stds_stay_positive():
     """Three people: four rows of one, one of another (its left edge only measured), none of
-    the third. The intervals are widened for the people with rows (two, not three, nor the
-    one with several rows), and a standard deviation's interval is cut at 0 where the
-    widening would pass it."""
+    the third. The intervals are widened for the two people with rows (neither all three nor
+    only the one with more than one row), and a standard deviation's interval is cut at 0
+    where the widening would pass it."""
     cluster = np.array([0, 0, 0, 0, 1])
     err = np.array([[1.0], [-1.0], [3.0], [-2.0], [0.5]]) * np.ones((1, 4))
     height = np.full(5, 100.0)
@@ -720,7 +720,7 @@ def test_edge_intervals_count_the_people_with_rows_and_stds_stay_positive():
     k = np.zeros((3, 3))
     for j, v in enumerate((np.ones_like(centred), centred, centred * centred)):
         np.add.at(k[:, j], who, v)
-    sd = math.sqrt(k[:, 2].sum() / 16)  # about 0: the sum of squares over 17 - 1
+    sd = math.sqrt(k[:, 2].sum() / 16)  # centred values: the sum of squares over 17 - 1
     _, draws, _ = _std_and_draws(centred, who, 3, weights)
     noise = out["edge_noise"]
     assert noise.value == pytest.approx(sd, rel=1e-9) and noise.n == 17 and noise.low == 0.0
