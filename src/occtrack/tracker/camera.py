@@ -78,6 +78,25 @@ def estimate_shift(previous: np.ndarray, current: np.ndarray, height_ratio: floa
 
 
 @njit
+def _qualifies(hp, hc, dx, dy, height_ratio):
+    """Step 1's test of a pair: heights hp (previous) and hc (current) within height_ratio
+    of each other, the centre moved by (dx, dy) less than sqrt(hp hc) on each axis."""
+    ratio = hc / max(hp, 1e-9)
+    return (ratio < height_ratio and ratio > 1.0 / height_ratio
+            and max(abs(dx), abs(dy)) < math.sqrt(hp * hc))
+
+
+@njit
+def _iou(a, i, b, j):
+    """IoU of boxes a[i] and b[j], left, top, width, height (0 for boxes without area)."""
+    iw = max(min(a[i, 0] + a[i, 2], b[j, 0] + b[j, 2]) - max(a[i, 0], b[j, 0]), 0.0)
+    ih = max(min(a[i, 1] + a[i, 3], b[j, 1] + b[j, 3]) - max(a[i, 1], b[j, 1]), 0.0)
+    inter = iw * ih
+    union = a[i, 2] * a[i, 3] + b[j, 2] * b[j, 3] - inter
+    return inter / union if union > 0 else 0.0
+
+
+@njit
 def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_pairs):
     """Steps 1-3 over every pair of boxes: (found, shift)."""
     N, M = len(previous), len(current)
@@ -87,12 +106,10 @@ def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_p
     C = 0
     for i in range(N):  # 1. candidates, in the order previous, then current
         for j in range(M):
-            scale = math.sqrt(previous[i, 3] * current[j, 3])
-            ratio = current[j, 3] / max(previous[i, 3], 1e-9)
             dx, dy = cc[j, 0] - cp[i, 0], cc[j, 1] - cp[i, 1]
-            if (ratio < height_ratio and ratio > 1.0 / height_ratio
-                    and max(abs(dx), abs(dy)) < scale):
-                candidates[C, 0], candidates[C, 1], unit[C] = dx, dy, scale
+            if _qualifies(previous[i, 3], current[j, 3], dx, dy, height_ratio):
+                candidates[C, 0], candidates[C, 1] = dx, dy
+                unit[C] = math.sqrt(previous[i, 3] * current[j, 3])
                 C += 1
     if C < min_pairs:
         return False, np.zeros(2)
@@ -103,13 +120,7 @@ def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_p
     overlap = np.zeros((N, M))
     for i in range(N):
         for j in range(M):
-            iw = max(min(moved[i, 0] + moved[i, 2], current[j, 0] + current[j, 2])
-                     - max(moved[i, 0], current[j, 0]), 0.0)
-            ih = max(min(moved[i, 1] + moved[i, 3], current[j, 1] + current[j, 3])
-                     - max(moved[i, 1], current[j, 1]), 0.0)
-            inter = iw * ih
-            union = moved[i, 2] * moved[i, 3] + current[j, 2] * current[j, 3] - inter
-            overlap[i, j] = inter / union if union > 0 else 0.0
+            overlap[i, j] = _iou(moved, i, current, j)
     best_prev = np.empty(M, dtype=np.int64)
     for j in range(M):
         best_prev[j] = np.argmax(overlap[:, j])
@@ -129,15 +140,15 @@ def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: fl
                      mode_radius: float, min_iou: float, min_pairs: int) -> np.ndarray | None:
     """`estimate_shift` on the pairs that can qualify only; the same result."""
     previous, current = np.asarray(previous, dtype=float), np.asarray(current, dtype=float)
-    candidates, unit = sparse_candidates(previous, current, height_ratio)
+    cp, cc = _centres(previous), _centres(current)
+    candidates, unit = _candidates_within_reach(previous, current, cp, cc, height_ratio)
     if len(unit) < min_pairs:
         return None
     mode = _mode_shift(candidates, mode_radius * unit)
     moved = previous.copy()
     moved[:, :2] += mode
     p, c = overlapping_pairs(_edges(moved), _edges(current))
-    shifts = _mutual_shifts(p, c, moved, current, _centres(previous), _centres(current),
-                            min_iou)
+    shifts = _mutual_shifts(p, c, moved, current, cp, cc, min_iou)
     if len(shifts) < min_pairs:
         return None
     return _median_rows(shifts)
@@ -148,8 +159,13 @@ def sparse_candidates(previous: np.ndarray, current: np.ndarray,
     """Step 1 without testing every pair: the candidate shifts (C, 2) and their units (the
     geometric mean of the two heights), in the all-pairs order (by previous box, then
     current); boxes (N, 4) and (M, 4) left, top, width, height as floats."""
+    return _candidates_within_reach(previous, current, _centres(previous), _centres(current),
+                                    height_ratio)
+
+
+def _candidates_within_reach(previous, current, cp, cc, height_ratio):
+    """`sparse_candidates` given the boxes' centres cp and cc."""
     hp, hc = previous[:, 3], current[:, 3]
-    cp, cc = _centres(previous), _centres(current)
     # a qualifying pair moved less than sqrt(hp hc) < sqrt(height_ratio) hp on each axis
     reach = np.sqrt(height_ratio) * hp * (1.0 + 1e-9) + 1e-9
     around = np.stack([cp - reach[:, None], cp + reach[:, None]], axis=-1)
@@ -165,11 +181,7 @@ def _candidates(i, j, hp, hc, cp, cc, height_ratio, M):
     K = 0
     for e in range(len(i)):
         a, b = i[e], j[e]
-        scale = math.sqrt(hp[a] * hc[b])
-        ratio = hc[b] / max(hp[a], 1e-9)
-        dx, dy = cc[b, 0] - cp[a, 0], cc[b, 1] - cp[a, 1]
-        if (ratio < height_ratio and ratio > 1.0 / height_ratio
-                and max(abs(dx), abs(dy)) < scale):
+        if _qualifies(hp[a], hc[b], cc[b, 0] - cp[a, 0], cc[b, 1] - cp[a, 1], height_ratio):
             keep[K] = e
             K += 1
     key = np.empty(K, dtype=np.int64)
@@ -193,12 +205,7 @@ def _mutual_shifts(p, c, moved, current, cp, cc, min_iou):
     E = len(p)
     overlap = np.empty(E)
     for e in range(E):
-        a, b = moved[p[e]], current[c[e]]
-        w = max(min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]), 0.0)
-        h = max(min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]), 0.0)
-        inter = w * h
-        union = a[2] * a[3] + b[2] * b[3] - inter
-        overlap[e] = inter / max(union, 1e-12)
+        overlap[e] = _iou(moved, p[e], current, c[e])
     N, M = len(moved), len(current)
     best_iou, best_cur = _first_best(p, overlap, c, N)
     _, best_prev = _first_best(c, overlap, p, M)
