@@ -221,24 +221,11 @@ def _mutual_shifts(p, c, moved, current, cp, cc, min_iou):
 
 @njit
 def _mode_shift(candidates, radius):
-    """The candidate shift with the most votes: a candidate b votes for a when it lies closer
-    than min(radius_a, radius_b) on both axes (itself included); each pair is looked at once,
-    candidates swept along x. Ties go to the smallest |dx| + |dy|, then the lowest (dx, dy),
-    so that the order of the boxes, which is no information, does not matter."""
+    """The candidate shift with the most votes (`_votes`). Ties go to the smallest
+    |dx| + |dy|, then the lowest (dx, dy), so that the order of the boxes, which is no
+    information, does not matter."""
     C = len(candidates)
-    votes = np.ones(C, dtype=np.int64)
-    order = np.argsort(candidates[:, 0], kind="mergesort")
-    for a in range(C):
-        ka = order[a]
-        for b in range(a + 1, C):
-            kb = order[b]
-            if not candidates[kb, 0] < candidates[ka, 0] + radius[ka]:
-                break
-            limit = min(radius[ka], radius[kb])
-            if (abs(candidates[kb, 0] - candidates[ka, 0]) < limit
-                    and abs(candidates[kb, 1] - candidates[ka, 1]) < limit):
-                votes[ka] += 1
-                votes[kb] += 1
+    votes = _votes(candidates[:, 0], candidates[:, 1], radius)
     top, best = votes.max(), -1
     for k in range(C):
         if votes[k] != top:
@@ -254,6 +241,49 @@ def _mode_shift(candidates, radius):
                     and candidates[k, 1] < candidates[best, 1]))):
             best = k
     return candidates[best].copy()
+
+
+@njit
+def _votes(x, y, radius):
+    """Per candidate a, the candidates b (a included) with |x_b - x_a| and |y_b - y_a| both
+    below min(radius_a, radius_b). The candidates are binned in strips of y as tall as the
+    largest radius and sorted by x within a strip; each pair is looked at once, from the one
+    in the lower strip (or earlier in x), over its own and the strips within its radius
+    above: the people who moved alike make a dense cluster, and a sweep along x alone would
+    compare each of them with every candidate in that column of shifts."""
+    C = len(x)
+    votes = np.ones(C, dtype=np.int64)
+    if C == 0:
+        return votes
+    tall = max(radius.max(), 1e-300)
+    low = y.min()
+    strip = np.floor((y - low) / tall).astype(np.int64)
+    order = np.argsort(x, kind="mergesort")
+    order = order[np.argsort(strip[order], kind="mergesort")]
+    strips = strip[order[-1]] + 1
+    start = np.zeros(strips + 1, dtype=np.int64)
+    for k in range(C):
+        start[strip[k] + 1] += 1
+    start = np.cumsum(start)
+    xs, ys, rs = x[order], y[order], radius[order]
+    counted = np.ones(C, dtype=np.int64)
+    for s in range(strips):
+        for a in range(start[s], start[s + 1]):
+            xa, ya, ra = xs[a], ys[a], rs[a]
+            # a margin far above rounding, so that no pair within reach is left out
+            mx, my = 1e-9 * (abs(xa) + ra), 1e-9 * (abs(ya) + abs(low) + ra)
+            last = min(np.int64(np.floor((ya + ra + my - low) / tall)), strips - 1)
+            for t in range(s, last + 1):
+                b = a + 1 if t == s else start[t] + np.searchsorted(
+                    xs[start[t]:start[t + 1]], xa - ra - mx)
+                while b < start[t + 1] and xs[b] < xa + ra + mx:
+                    limit = min(ra, rs[b])
+                    if abs(xs[b] - xa) < limit and abs(ys[b] - ya) < limit:
+                        counted[a] += 1
+                        counted[b] += 1
+                    b += 1
+    votes[order] = counted
+    return votes
 
 
 @njit
