@@ -86,8 +86,10 @@ GROUPS = {
                      "sparse_candidates_reach_the_edge_of_what_qualifies",
                      "the_camera_pairs_boxes_by_their_own_extent_on_each_axis",
                      "camera_shift_needs_min_pairs_and_finds_the_majority",
+                     "the_camera_mode_counts_every_vote_of_the_all_pairs_rule",
                      "gated_and_ungated_runs_give_the_same_tracks",
                      "a_crowd_of_150_is_reported_whole_with_the_default_capacity",
+                     "a_crowd_missed_at_random_is_reported_within_95_to_105_percent",
                      "the_pool_stays_bounded_over_a_long_run"))]),
 }
 SLOW: set[str] = set()  # groups that take hours on one core: only when asked for (none now)

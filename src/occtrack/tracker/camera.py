@@ -275,8 +275,8 @@ def _votes(x, y, radius):
             last = min(np.int64(np.floor((ya + ra + my - low) / tall)), strips - 1)
             own = 0
             for t in range(s, last + 1):
-                b = a + 1 if t == s else _first_at_least(xs, start[t], start[t + 1],
-                                                         xa - ra - mx)
+                b = a + 1 if t == s else start[t] + np.searchsorted(
+                    xs[start[t]:start[t + 1]], xa - ra - mx)
                 while b < start[t + 1] and xs[b] < xa + ra + mx:
                     limit = min(ra, rs[b])
                     near = np.int64(max(abs(xs[b] - xa), abs(ys[b] - ya)) < limit)
@@ -286,19 +286,6 @@ def _votes(x, y, radius):
             counted[a] += own
     votes[order] = counted
     return votes
-
-
-@njit
-def _first_at_least(values, low, high, bound):
-    """The first index in [low, high) of sorted `values` whose value is at least `bound`
-    (high if none): np.searchsorted on the run, without making a view of it."""
-    while low < high:
-        middle = (low + high) // 2
-        if values[middle] < bound:
-            low = middle + 1
-        else:
-            high = middle
-    return low
 
 
 @njit
