@@ -180,18 +180,18 @@ def main() -> None:
         crowd_table(title, detector, people, args.frames, args.repeats)
 
 
-def crowd_table(title: str, detector: Detector, people: list[int], frames: int,
+def crowd_table(title: str, detector: Detector, people: list[int], num_frames: int,
                 repeats: int) -> None:
-    print(f"\nCrowds: {title}; 1920 x 1080, boxes 50-120 px tall, {frames} frames, "
+    print(f"\nCrowds: {title}; 1920 x 1080, boxes 50-120 px tall, {num_frames} frames, "
           f"occtrack defaults ({DEFAULT} occlusion):")
     print(f"  {'people':>6}{'dets/frame':>12}{'occtrack tracks':>17}{'ByteTrack tracks':>18}"
           f"{'occtrack f/s':>14}{'ByteTrack f/s':>15}{'ratio':>7}  (tracks: whole run / after "
           f"the first second)")
     per_frame, shares = {}, {}
     for count in people:
-        scene = crowd_scene(crowd(count, frames, detector), seed=0)
-        frames_ = frames_of(scene.detections, scene.frames)
-        best = race(frames_, scene.image_size, scene.fps, (DEFAULT,), repeats)
+        scene = crowd_scene(crowd(count, num_frames, detector), seed=0)
+        frames = frames_of(scene.detections, scene.frames)
+        best = race(frames, scene.image_size, scene.fps, (DEFAULT,), repeats)
         occ, bt = best[DEFAULT], best["bytetrack"]
         per_frame[count] = (occ[0] / scene.frames, bt[0] / scene.frames)
         first = round(scene.fps)
@@ -209,6 +209,7 @@ def crowd_table(title: str, detector: Detector, people: list[int], frames: int,
           "report_coast_time before / ever:")
     for count, (now, recent, ever) in shares.items():
         print(f"  {count:>6}{now:>10.1%}{recent:>10.1%}{ever:>10.1%}")
+
 
 if __name__ == "__main__":
     main()

@@ -264,6 +264,12 @@ def test_the_camera_mode_counts_every_vote_of_the_all_pairs_rule(seed):
     gap = np.abs(shift[:, None, :] - shift[None, :, :]).max(axis=2)
     expected = (gap < limit).sum(axis=1) + (radius == 0)
     np.testing.assert_array_equal(camera._votes(shift[:, 0], shift[:, 1], radius), expected)
+    # no radius: each votes for itself alone; a radius far below the spread: no more strips
+    # than candidates (else 1e12 of them), the same votes
+    np.testing.assert_array_equal(camera._votes(shift[:, 0], shift[:, 1], 0 * radius), 1)
+    tiny = radius * 1e-12
+    expected = (gap < np.minimum(tiny[:, None], tiny[None, :])).sum(axis=1) + (radius == 0)
+    np.testing.assert_array_equal(camera._votes(shift[:, 0], shift[:, 1], tiny), expected)
 
 
 @pytest.mark.parametrize("people", [3, 70])  # the all-pairs form, then the sparse one

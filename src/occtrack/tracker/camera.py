@@ -247,16 +247,17 @@ def _mode_shift(candidates, radius):
 def _votes(x, y, radius):
     """Per candidate a, the candidates b (a included) with |x_b - x_a| and |y_b - y_a| both
     below min(radius_a, radius_b). The candidates are binned in strips of y as tall as the
-    largest radius and sorted by x within a strip; each pair is looked at once, from the one
-    in the lower strip (or earlier in x), over its own and the strips within its radius
-    above: the people who moved alike make a dense cluster, and a sweep along x alone would
-    compare each of them with every candidate in that column of shifts."""
+    largest radius (taller if that made more strips than candidates) and sorted by x within a
+    strip; each pair is looked at once, from the one in the lower strip (or earlier in x),
+    over its own strip and those within its radius above. The people who moved alike make a
+    dense cluster of shifts, and a sweep along x alone compared each of them with every
+    candidate in that column."""
     C = len(x)
     votes = np.ones(C, dtype=np.int64)
-    if C == 0:
+    if C == 0 or not radius.max() > 0:
         return votes
-    tall = max(radius.max(), 1e-300)
     low = y.min()
+    tall = max(radius.max(), (y.max() - low) / C)  # any height is exact; C + 1 strips at most
     strip = np.floor((y - low) / tall).astype(np.int64)
     order = np.argsort(x, kind="mergesort")
     order = order[np.argsort(strip[order], kind="mergesort")]
