@@ -346,7 +346,7 @@ def test_a_crowd_of_150_is_reported_whole_with_the_default_capacity():
 def test_a_crowd_missed_at_random_is_reported_within_95_to_105_percent(seed):
     """Issue 10's crowd: each person detected with P_D 0.9 whether hidden or not. Once the
     first second's tracks are confirmed, every frame reports 95 to 105 % of the 150 people
-    (a track bridges its person's misses; none is cut, none doubled)."""
+    (a track bridges its person's misses; the crowd is neither cut nor doubled)."""
     independent = Detector(p_detect=0.9, min_visible=0.0, suppress_cover=1.0)
     scene = crowd_scene(crowd(150, 60, detector=independent), seed=seed)
     tracker = Tracker(TrackerConfig())
