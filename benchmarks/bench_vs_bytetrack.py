@@ -40,7 +40,13 @@ import numpy as np
 from occtrack import peers
 from occtrack.io.data import find_sequence
 from occtrack.io.mot import read_mot, read_seqinfo
-from occtrack.scenarios.pedestrians import Crowd, Detector, crowd_scene
+from occtrack.scenarios.pedestrians import (
+    MISSED_AT_RANDOM,
+    OCCLUDING,
+    Detector,
+    crowd_scene,
+    dense_crowd,
+)
 from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig
 
 DEFAULT = TrackerConfig().occlusion  # the crowds run the defaults
@@ -68,21 +74,10 @@ def seen_shares(scene, within: int) -> tuple[float, float, float]:
         (gaps < 10**8).mean())
 
 
-OCCLUDING = Detector(p_detect=0.9)
 CROWDS = {"independent misses, every person detected with P_D 0.9, hidden or not":
-          Detector(p_detect=0.9, min_visible=0.0, suppress_cover=1.0),
+          MISSED_AT_RANDOM,
           "an occluding crowd, P_D 0.9 for a person less than 70 % hidden, "
           "non-maximum suppression": OCCLUDING}
-
-
-def crowd(people: int, frames: int = 300, detector: Detector = OCCLUDING) -> Crowd:
-    """Boxes 50 px tall at the far edge (feet at row 130) to 120 px at the near one (row
-    1060), heights linear in the feet's row; the occluding detector unless told."""
-    far, near, short, tall = 130.0, 1060.0, 50.0, 120.0
-    per_px = (tall - short) / (near - far)
-    return Crowd(people=people, frames=frames, horizon=far - short / per_px,
-                 height_per_px=per_px, farthest_bottom=far, nearest_bottom=near,
-                 detector=detector)
 
 
 def shares_text(shown: list[int], people: int, first: int) -> str:
@@ -189,7 +184,7 @@ def crowd_table(title: str, detector: Detector, people: list[int], num_frames: i
           f"the first second)")
     per_frame, shares = {}, {}
     for count in people:
-        scene = crowd_scene(crowd(count, num_frames, detector), seed=0)
+        scene = crowd_scene(dense_crowd(count, num_frames, detector=detector), seed=0)
         frames = frames_of(scene.detections, scene.frames)
         best = race(frames, scene.image_size, scene.fps, (DEFAULT,), repeats)
         occ, bt = best[DEFAULT], best["bytetrack"]

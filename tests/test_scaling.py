@@ -15,20 +15,8 @@ import occtrack.tracker.camera as camera
 from occtrack.association import lbp_marginals, lbp_sparse
 from occtrack.densities import gaussian
 from occtrack.models.box import BoxMeasurement
-from occtrack.scenarios.pedestrians import Crowd, Detector, crowd_scene
+from occtrack.scenarios.pedestrians import MISSED_AT_RANDOM, crowd_scene, dense_crowd
 from occtrack.tracker import Tracker, TrackerConfig
-
-OCCLUDING = Detector(p_detect=0.9)
-
-
-def crowd(people: int, frames: int, fps: float = 30.0, detector: Detector = OCCLUDING) -> Crowd:
-    """1920 x 1080, boxes 50 px tall at the far edge to 120 px at the near one (the
-    benchmark's crowds, benchmarks/bench_vs_bytetrack.py); people more than 70 % hidden go
-    undetected unless `detector` says otherwise."""
-    per_px = 70.0 / 930.0
-    return Crowd(people=people, frames=frames, fps=fps, horizon=130.0 - 50.0 / per_px,
-                 height_per_px=per_px, farthest_bottom=130.0, nearest_bottom=1060.0,
-                 detector=detector)
 
 
 def frames_of(scene):
@@ -170,7 +158,7 @@ def test_sparse_camera_shift_equals_the_all_pairs_one(wide):
     """On boxes taller than wide (people) and wider than tall (each box w, h made 2h, h / 2:
     cars), for every frame pair of a crowd, with a random camera shift; float32 boxes give
     what their float64 values give (the estimate is computed in float64), in both forms."""
-    scene = crowd_scene(crowd(120, 12), seed=5)
+    scene = crowd_scene(dense_crowd(120, 12), seed=5)
     frames = frames_of(scene)
     if wide:
         frames = [(np.c_[b[:, :2], 2.0 * b[:, 3], 0.5 * b[:, 3]], s) for b, s in frames]
@@ -311,7 +299,7 @@ def test_gated_and_ungated_runs_give_the_same_tracks(monkeypatch):
     monkeypatch.setattr("occtrack.filters.gmpmb.DENSE_PAIRS", 0)
     monkeypatch.setattr(spatial, "DENSE_PAIRS", 0)
     monkeypatch.setattr("occtrack.occlusion.box_geometry.DENSE_PAIRS", 0)
-    scene = crowd_scene(crowd(30, 60), seed=2)
+    scene = crowd_scene(dense_crowd(30, 60), seed=2)
     for occlusion in ("measurement-wise", "object-wise"):
         results = [Tracker(TrackerConfig(occlusion=occlusion, gating=gating)).run(
             scene.detections, scene.frames) for gating in (True, False)]
@@ -326,7 +314,7 @@ def test_gated_and_ungated_runs_give_the_same_tracks(monkeypatch):
 def test_a_crowd_of_150_is_reported_whole_with_the_default_capacity():
     """With the defaults (capacity and labels grow) every person can have a track: the old
     fixed 72 labels cut such a crowd to 72 in silence."""
-    scene = crowd_scene(crowd(150, 45), seed=1)
+    scene = crowd_scene(dense_crowd(150, 45), seed=1)
     tracker = Tracker(TrackerConfig())
     shown = []
     with warnings.catch_warnings():
@@ -347,8 +335,7 @@ def test_a_crowd_missed_at_random_is_reported_within_95_to_105_percent(seed):
     """Issue 10's crowd: each person detected with P_D 0.9 whether hidden or not. Once the
     first second's tracks are confirmed, every frame reports 95 to 105 % of the 150 people
     (a track bridges its person's misses; the crowd is neither cut nor doubled)."""
-    independent = Detector(p_detect=0.9, min_visible=0.0, suppress_cover=1.0)
-    scene = crowd_scene(crowd(150, 60, detector=independent), seed=seed)
+    scene = crowd_scene(dense_crowd(150, 60, detector=MISSED_AT_RANDOM), seed=seed)
     tracker = Tracker(TrackerConfig())
     shown = [len(tracker.step(boxes, scores)) for boxes, scores in frames_of(scene)]
     assert 0.95 * 150 <= min(shown[30:]) <= max(shown[30:]) <= 1.05 * 150
@@ -359,7 +346,7 @@ def test_a_crowd_missed_at_random_is_reported_within_95_to_105_percent(seed):
     ("capacity", 200, r"capacity = 200 Gaussian components reached at step \d+: \d+ were "),
 ])
 def test_a_hard_limit_is_reported_once_with_the_count(setting, limit, pattern):
-    scene = crowd_scene(crowd(40, 20), seed=3)
+    scene = crowd_scene(dense_crowd(40, 20), seed=3)
     tracker = Tracker(TrackerConfig(**{setting: limit}))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -378,7 +365,7 @@ def test_a_hard_limit_is_reported_once_with_the_count(setting, limit, pattern):
 def test_the_pool_stays_bounded_over_a_long_run():
     """Arrays grow while the scene fills, then stay: memory follows the people in view,
     not the time."""
-    scene = crowd_scene(crowd(15, 1200, fps=15.0), seed=4)
+    scene = crowd_scene(dense_crowd(15, 1200, fps=15.0), seed=4)
     tracker = Tracker(TrackerConfig(fps=15.0))
     sizes = []
     for index, (boxes, scores) in enumerate(frames_of(scene)):

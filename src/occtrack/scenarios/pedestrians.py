@@ -207,6 +207,23 @@ def crowd_scene(crowd: Crowd = Crowd(), seed: int = 0) -> Scene:
     return simulate(walkers, crowd.frames, crowd.image_size, crowd.fps, crowd.detector, rng)
 
 
+OCCLUDING = Detector(p_detect=0.9)
+MISSED_AT_RANDOM = Detector(p_detect=0.9, min_visible=0.0, suppress_cover=1.0)  # hidden or not
+
+
+def dense_crowd(people: int, frames: int = 300, fps: float = 30.0,
+                detector: Detector = OCCLUDING) -> Crowd:
+    """Issue 10's crowds (benchmarks/bench_vs_bytetrack.py): `people` walkers in a 1920 x 1080
+    image, boxes 50 px tall at the far edge (feet at row 130) to 120 px at the near one (row
+    1060), heights linear in the feet's row. With `OCCLUDING`, people more than 70 % hidden
+    go undetected and covered boxes are suppressed; with `MISSED_AT_RANDOM`, each person is
+    detected with P_D 0.9 whether hidden or not (the crowd the issue measured)."""
+    far, near, short, tall = 130.0, 1060.0, 50.0, 120.0
+    per_px = (tall - short) / (near - far)
+    return Crowd(people=people, frames=frames, fps=fps, horizon=far - short / per_px,
+                 height_per_px=per_px, farthest_bottom=far, nearest_bottom=near,
+                 detector=detector)
+
 def crossing_pair(seed: int = 0, frames: int = 300, fps: float = 30.0,
                   detector: Detector = Detector(p_detect=0.95, clutter_rate=0.0)) -> Scene:
     """Two people: A, farther away, walks right; B, nearer, walks left and passes in front
