@@ -424,7 +424,8 @@ def test_moved_tracks_carry_every_corner_along_the_velocity(box_format):
     boxes = np.array([[10.0, 20.0, 50.0, 120.0], [300.0, 40.0, 340.0, 150.0]])
     tracks = Tracks(np.array([4, 9]), boxes, np.array([0.9, 0.8]),
                     np.array([[30.0, -10.0], [0.0, 6.0]]), np.array([0, -1]),
-                    np.array([0, 2]), np.array([False, True]), box_format)
+                    np.array([0, 2]), np.array([False, True]), np.array([0.85, 0.5]),
+                    box_format)
     moved = tracks.moved(0.5)
     step = np.array([[15.0, -5.0], [0.0, 3.0]])
     expected = boxes + np.c_[step, step if box_format == "xyxy" else np.zeros((2, 2))]
@@ -434,6 +435,7 @@ def test_moved_tracks_carry_every_corner_along_the_velocity(box_format):
     assert moved.occluded.tolist() == [False, True] and moved.box_format == box_format
     np.testing.assert_array_equal(moved.velocities, tracks.velocities)
     np.testing.assert_array_equal(moved.existence, tracks.existence)
+    np.testing.assert_array_equal(moved.confidence, tracks.confidence)
 
 
 def test_update_returns_the_callers_own_boxes_for_detected_tracks():

@@ -20,7 +20,9 @@ HELP = "track the boxes of a MOTChallenge detection file (PMB tracker with occlu
 DESCRIPTION = """\
 Track pedestrians (or any boxes) through a MOTChallenge detection file with the
 Gaussian-mixture Poisson multi-Bernoulli tracker, and write a MOTChallenge result file
-(frame,id,left,top,width,height,existence,-1,-1,-1), one row per reported object and frame.
+(frame,id,left,top,width,height,confidence,-1,-1,-1), one row per reported object and frame.
+The confidence is the probability that the box is a real object at that place (exists and
+overlaps the true box at IoU >= 0.5): a calibrated probability (`occtrack eval --calibration`).
 
 Detection rows are frame,id,left,top,width,height,score[,...] (the id is ignored). Occlusion:
   none              a missed detection is evidence that the object is gone
@@ -166,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     result = Tracker(config).run(detections, frames, quiet=args.quiet,
                                  desc=f"tracking ({config.occlusion})")
-    write_mot(args.output, result.frame, result.id, result.box, result.existence,
+    write_mot(args.output, result.frame, result.id, result.box, result.confidence,
               overwrite=args.force)
     if not args.quiet:
         print(summary(result.frames, result.num_tracks, time.perf_counter() - start),

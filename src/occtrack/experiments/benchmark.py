@@ -166,7 +166,7 @@ def track_with_states(name: str, seq: Sequence) -> tuple[MotTable, np.ndarray | 
             states[out.coasting] = COASTING
         if out.occluded is not None:
             states[out.occluded] = OCCLUDED
-        return MotTable(out.frame, out.id, out.box, out.existence, np.full(n, -1),
+        return MotTable(out.frame, out.id, out.box, out.confidence, np.full(n, -1),
                         np.full(n, -1.0), "<occtrack>"), states
     return peers.track_peer(name, seq.det, seq.length, seq.fps), None
 

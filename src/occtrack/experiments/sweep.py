@@ -654,7 +654,7 @@ def _run_mot(cell: Cell) -> dict:
     out = Tracker(config).run(det, seq.length)
     seconds = time.perf_counter() - start
     n = len(out.frame)
-    result = MotTable(out.frame, out.id, out.box, out.existence, np.full(n, -1),
+    result = MotTable(out.frame, out.id, out.box, out.confidence, np.full(n, -1),
                       np.full(n, -1.0), "<occtrack>")
     scores = summary(sequence_results(scored_frames(seq.gt, result, "mot17",
                                                     seq.length).trackeval))

@@ -89,7 +89,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def result_table(result) -> MotTable:
     n = len(result.frame)
-    return MotTable(result.frame, result.id, result.box, result.existence,
+    return MotTable(result.frame, result.id, result.box, result.confidence,
                     np.full(n, -1), np.full(n, -1.0), "<tracker>")
 
 

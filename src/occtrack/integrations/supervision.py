@@ -11,7 +11,10 @@ out, like Roboflow `trackers`' `ByteTrackTracker.update` (needs the optional ext
         detections = tracker.update(detections, frame=frame)   # detections.tracker_id
 
 Every detection comes back, in its order, with the id of the track that took it, or -1 when
-none did (a track not yet confirmed, or a detection taken for clutter). Tracks are kept apart
+none did (a track not yet confirmed, or a detection taken for clutter). A detection a track took
+gets the track's calibrated confidence (`Tracks.confidence`: the probability that the box is a
+real object at that place), the others keep the detector's; the detector's own score stays in
+`data["detector_confidence"]` when it was given. Tracks are kept apart
 by `class_id`. With `include_coasting=True` the tracks reported without a detection this frame
 (coasting, e.g. hidden behind someone) are appended as extra rows with their estimated boxes;
 `data["occluded"]` then marks those whose miss is put down to occlusion and
@@ -90,9 +93,14 @@ class OcctrackTracker:
         took = tracks.detection_index >= 0
         tracker_id = np.full(len(detections), -1, dtype=int)
         tracker_id[tracks.detection_index[took]] = tracks.ids[took]
-        result = dataclasses.replace(detections, tracker_id=tracker_id,
-                                     data=dict(detections.data),
-                                     metadata=dict(detections.metadata))
+        data = dict(detections.data)
+        confidence = detections.confidence
+        if confidence is not None:
+            data["detector_confidence"] = np.asarray(confidence).copy()
+            confidence = np.asarray(confidence, dtype=float).copy()
+            confidence[tracks.detection_index[took]] = tracks.confidence[took]
+        result = dataclasses.replace(detections, tracker_id=tracker_id, confidence=confidence,
+                                     data=data, metadata=dict(detections.metadata))
         if not self.include_coasting:
             return result
         return _with_coasting(result, tracks)
@@ -125,7 +133,7 @@ def _with_coasting(result: sv.Detections, tracks: Tracks) -> sv.Detections:
     extra = sv.Detections(
         xyxy=tracks.boxes[coast].astype(float),
         mask=mask,
-        confidence=None if result.confidence is None else tracks.existence[coast].copy(),
+        confidence=None if result.confidence is None else tracks.confidence[coast].copy(),
         class_id=None if result.class_id is None else tracks.classes[coast].copy(),
         tracker_id=tracks.ids[coast].copy(), data=extra_data)
     if n == 0:

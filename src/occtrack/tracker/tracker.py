@@ -49,6 +49,7 @@ from occtrack.tracker.boxes import (
     to_ltwh,
 )
 from occtrack.tracker.camera import estimate_shift
+from occtrack.tracker.confidence import box_covariances, overlap_probability
 
 OCCLUDED_ABOVE = 0.5
 """A missed object is reported as occluded when the probability that occlusion caused its miss
@@ -64,6 +65,10 @@ class Tracks:
         boxes: (n, 4) float boxes in `box_format`: the detection's own box for an object that
             took one this frame, the filter's estimate for one that did not.
         existence: (n,) probability that each object exists.
+        confidence: (n,) probability that each box is a real object at that place: the
+            object exists and its true box overlaps the reported one at IoU >= 0.5
+            (`occtrack.tracker.confidence`); a calibrated probability, the 7th column of
+            every result file.
         velocities: (n, 2) velocity of each box centre, px / s.
         detection_index: (n,) int, the index of the detection each object took this frame
             (into the boxes given to `update` / `step`), -1 for an object reported without one
@@ -81,6 +86,7 @@ class Tracks:
     detection_index: np.ndarray
     classes: np.ndarray
     occluded: np.ndarray
+    confidence: np.ndarray
     box_format: str = "ltwh"
 
     def __len__(self) -> int:
@@ -99,7 +105,7 @@ class Tracks:
         shift = np.concatenate([step, step if self.box_format == "xyxy" else zeros], axis=1)
         return Tracks(self.ids, self.boxes + shift, self.existence, self.velocities,
                       np.full(len(self), -1, dtype=np.int64), self.classes, self.occluded,
-                      self.box_format)
+                      self.confidence, self.box_format)
 
     def in_format(self, box_format: BoxFormat) -> Tracks:
         """The same tracks with boxes in another format."""
@@ -108,7 +114,8 @@ class Tracks:
             return self
         ltwh = to_ltwh(self.boxes, self.box_format)
         return Tracks(self.ids, from_ltwh(ltwh, box_format), self.existence, self.velocities,
-                      self.detection_index, self.classes, self.occluded, box_format)
+                      self.detection_index, self.classes, self.occluded, self.confidence,
+                      box_format)
 
 
 @dataclass(frozen=True)
@@ -123,6 +130,7 @@ class TrackResult:
     seconds_tracking: float = 0.0
     coasting: np.ndarray | None = None  # (N,) bool: reported without a detection
     occluded: np.ndarray | None = None  # (N,) bool: ... and its miss put down to occlusion
+    confidence: np.ndarray | None = None  # (N,) Tracks.confidence: the result file's 7th column
 
     @property
     def num_tracks(self) -> int:
@@ -268,8 +276,16 @@ class Tracker:
             r, means, centre_std, f.slot_used, took, f.slot_coast, f.slot_serial,
             self._reported_serial, self._report_id, self._next_id, c.report_existence,
             c.report_coast_time, c.report_centre_std)
-        return Tracks(self._report_id[shown], *_report_rows(
-            shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE))
+        boxes, existence, velocities, index, classes, occluded = _report_rows(
+            shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE)
+        n = f.n
+        cov = box_covariances(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
+                              len(r))[shown]
+        chosen = means[shown]
+        confidence = existence * overlap_probability(chosen[:, :, 0], chosen[:, :, 2], cov,
+                                                     boxes)
+        return Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
+                      occluded, confidence)
 
     def run(self, detections: MotTable | Iterable[npt.ArrayLike], num_frames: int | None = None,
             quiet: bool = True, desc: str = "tracking") -> TrackResult:
@@ -293,7 +309,8 @@ class Tracker:
         elif total is None and hasattr(detections, "__len__"):
             total = len(detections)
         c = self.config
-        rows: dict[str, list] = {k: [] for k in ("frame", "id", "box", "r", "coast", "occ")}
+        rows: dict[str, list] = {k: [] for k in ("frame", "id", "box", "r", "coast", "occ",
+                                                 "conf")}
         tracks = None
         start = time.perf_counter()
         count = 0
@@ -312,13 +329,15 @@ class Tracker:
             rows["r"].append(shown.existence)
             rows["coast"].append(shown.coasting)
             rows["occ"].append(shown.occluded)
+            rows["conf"].append(shown.confidence)
         seconds = time.perf_counter() - start
         if not count:
             return TrackResult(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 4)),
-                               np.zeros(0), 0, seconds, np.zeros(0, bool), np.zeros(0, bool))
+                               np.zeros(0), 0, seconds, np.zeros(0, bool), np.zeros(0, bool),
+                               np.zeros(0))
         return TrackResult(*(np.concatenate(rows[k]) for k in ("frame", "id", "box", "r")),
-                           count, seconds, np.concatenate(rows["coast"]),
-                           np.concatenate(rows["occ"]))
+                           count, seconds, *(np.concatenate(rows[k])
+                                             for k in ("coast", "occ", "conf")))
 
 
 def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np.ndarray]]:

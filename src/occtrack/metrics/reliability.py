@@ -1,0 +1,108 @@
+"""Calibration of a tracker's confidence column: the reliability table and its ECE.
+
+A tracker that writes a confidence c on each box (MOTChallenge's 7th column) says: a box
+reported with c is a real object at that place with probability c. "Right" is decided as the
+mot17 protocol decides a detection-level hit: boxes on distractors are left out (TrackEval's
+preprocessing), and in each frame the remaining boxes are matched one to one to the true
+pedestrians, maximising the number of pairs at IoU >= 0.5 (`RIGHT_IOU`). A matched box is right,
+an unmatched one wrong.
+
+The boxes are binned by confidence into `bins` equal intervals of [0, 1] (the last one closed);
+per bin the table holds the boxes, their mean confidence and the share right. The expected
+calibration error (Naeini et al. 2015, Guo et al. 2017) is
+
+    ECE = sum_b (n_b / N) |mean confidence_b - share right_b|,
+
+the gap between what a box says and how often it is right, weighted by where the boxes are.
+Written here, not taken from a library: scikit-learn's `calibration_curve` bins the same way but
+drops empty bins and returns no counts, and the matching is the tracking protocol's, not a
+classifier's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from occtrack.metrics.protocols import ScoredFrames
+
+RIGHT_IOU = 0.5
+"""A reported box is right when it is matched to a true object at IoU >= this."""
+BINS = 10
+
+
+@dataclass(frozen=True)
+class Reliability:
+    """A reliability table: per bin b (confidence in [edges[b], edges[b + 1]), the last bin
+    closed), `boxes[b]` reported boxes, `confidence[b]` their mean confidence and `right[b]`
+    the share of them right (NaN for an empty bin); `ece` the expected calibration error and
+    `num_boxes` the boxes scored."""
+
+    edges: np.ndarray
+    boxes: np.ndarray
+    confidence: np.ndarray
+    right: np.ndarray
+    ece: float
+
+    @property
+    def num_boxes(self) -> int:
+        return int(self.boxes.sum())
+
+    def as_dict(self) -> dict:
+        def plain(values):
+            return [None if not np.isfinite(v) else round(float(v), 6) for v in values]
+        return {"ece": round(self.ece, 6), "bins": len(self.boxes),
+                "boxes": self.boxes.astype(int).tolist(),
+                "confidence": plain(self.confidence), "right": plain(self.right)}
+
+
+def right_boxes(frames: ScoredFrames) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, right): the result rows the protocol scores, in frame order, and whether each is
+    matched one to one to a true object at IoU >= `RIGHT_IOU` (the most such pairs a frame)."""
+    rows, right = [], []
+    for est, iou in zip(frames.estimate_rows, frames.iou, strict=True):
+        hit = np.zeros(len(est), bool)
+        if iou.size:
+            good = iou >= RIGHT_IOU - 1e-12
+            if good.any():
+                truth, estimate = linear_sum_assignment(good, maximize=True)
+                hit[estimate[good[truth, estimate]]] = True
+        rows.append(np.asarray(est, dtype=np.int64))
+        right.append(hit)
+    if not rows:
+        return np.zeros(0, np.int64), np.zeros(0, bool)
+    return np.concatenate(rows), np.concatenate(right)
+
+
+def reliability_table(confidence: np.ndarray, right: np.ndarray, bins: int = BINS) -> Reliability:
+    """The reliability table and ECE of boxes with `confidence` (in [0, 1]) that are `right`
+    (bool) or not."""
+    confidence = np.asarray(confidence, dtype=float)
+    right = np.asarray(right, dtype=bool)
+    if confidence.shape != right.shape:
+        raise ValueError(f"{len(confidence)} confidences for {len(right)} boxes")
+    if not np.isfinite(confidence).all() or confidence.min(initial=0) < 0 or \
+            confidence.max(initial=0) > 1:
+        raise ValueError("confidences must be probabilities in [0, 1]")
+    if bins < 1:
+        raise ValueError(f"bins must be at least 1, not {bins}")
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    which = np.clip(np.searchsorted(edges, confidence, side="right") - 1, 0, bins - 1)
+    count = np.bincount(which, minlength=bins)
+    total_conf = np.bincount(which, weights=confidence, minlength=bins)
+    total_right = np.bincount(which, weights=right.astype(float), minlength=bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_conf = total_conf / count
+        share = total_right / count
+    n = max(int(count.sum()), 1)
+    ece = float(np.abs(total_conf - total_right).sum() / n)
+    return Reliability(edges, count, mean_conf, share, ece)
+
+
+def reliability(frames: ScoredFrames, confidence: np.ndarray, bins: int = BINS) -> Reliability:
+    """The reliability table of a result under a protocol's scored frames: `confidence` is the
+    result table's confidence column (one entry a row of the result table)."""
+    rows, right = right_boxes(frames)
+    return reliability_table(np.asarray(confidence, dtype=float)[rows], right, bins)

@@ -1,0 +1,115 @@
+"""The calibrated confidence (occtrack.tracker.confidence) and its measure, the reliability
+table and ECE (occtrack.metrics.reliability)."""
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from occtrack.metrics.protocols import ScoredFrames
+from occtrack.metrics.reliability import reliability_table, right_boxes
+from occtrack.tracker import Tracker, TrackerConfig
+from occtrack.tracker.confidence import DRAWS, box_covariances, overlap_probability
+
+
+def test_ece_by_hand():
+    """Five boxes in three of four bins: |.1 - 0| in bin 0 (one box), |(.6 + .7) / 2 - 1 / 2|
+    in bin 2 (two boxes), |(.9 + 1) / 2 - 1| in bin 3 (two, 1.0 in the closed last bin)."""
+    conf = np.array([0.1, 0.6, 0.7, 0.9, 1.0])
+    right = np.array([False, True, False, True, True])
+    table = reliability_table(conf, right, bins=4)
+    assert table.boxes.tolist() == [1, 0, 2, 2] and table.num_boxes == 5
+    np.testing.assert_allclose(table.confidence[[0, 2, 3]], [0.1, 0.65, 0.95])
+    np.testing.assert_allclose(table.right[[0, 2, 3]], [0.0, 0.5, 1.0])
+    assert np.isnan(table.confidence[1]) and np.isnan(table.right[1])
+    by_hand = (Fraction(1, 5) * Fraction(1, 10) + Fraction(2, 5) * Fraction(3, 20)
+               + Fraction(2, 5) * Fraction(1, 20))
+    assert table.ece == pytest.approx(float(by_hand), abs=1e-15)
+    assert table.as_dict()["right"][1] is None
+
+
+def test_ece_of_a_calibrated_and_of_a_sure_confidence():
+    """Boxes said .25 of which a quarter are right: ECE 0; all said 1 with half right: 1 / 2."""
+    assert reliability_table(np.full(8, 0.25), np.arange(8) < 2).ece == pytest.approx(0.0)
+    assert reliability_table(np.ones(6), np.arange(6) < 3).ece == pytest.approx(0.5)
+    assert reliability_table(np.zeros(0), np.zeros(0, bool)).ece == 0.0
+
+
+@pytest.mark.parametrize("conf, message", [
+    (np.array([0.5, 1.2]), "probabilities"), (np.array([np.nan, 0.2]), "probabilities"),
+    (np.array([0.5]), "1 confidences for 2 boxes")])
+def test_reliability_rejects_what_is_not_a_probability(conf, message):
+    with pytest.raises(ValueError, match=message):
+        reliability_table(conf, np.array([True, False]))
+
+
+def test_right_boxes_match_one_to_one_at_half_overlap():
+    """Two reported boxes on one true object: one is right, the other wrong; a box at IoU
+    exactly 0.5 is right; the matching takes the most pairs (not the greedy best IoU)."""
+    iou = [np.array([[0.9, 0.8]]), np.array([[0.5, 0.0]]),
+           np.array([[0.9, 0.6], [0.7, 0.0]])]
+    frames = ScoredFrames("mot17", [np.arange(len(i)) for i in iou],
+                          [np.array([0, 1]), np.array([2, 3]), np.array([4, 5])], iou)
+    rows, right = right_boxes(frames)
+    assert rows.tolist() == [0, 1, 2, 3, 4, 5]
+    assert right.sum() == 4 and right[2] and not right[3] and right[4] and right[5]
+
+
+def test_overlap_probability_of_a_known_box_is_its_iou_test():
+    """No spread: 1 where the mean box overlaps the reported one at IoU >= 0.5, else 0."""
+    centre = np.array([[50.0, 100.0], [50.0, 100.0]])
+    half = np.array([[20.0, 50.0], [20.0, 50.0]])
+    reported = np.array([[30.0, 50.0, 40.0, 100.0], [60.0, 50.0, 40.0, 100.0]])
+    p = overlap_probability(centre, half, np.zeros((2, 2, 2, 2)), reported)
+    assert p.tolist() == [1.0, 0.0]
+
+
+def test_overlap_probability_against_independent_monte_carlo():
+    """Against 200,000 fresh draws of the same Gaussian (correlated centre and half-size):
+    within 4 standard errors of the fixed draws' estimate (DRAWS of them) and of the fresh
+    one's."""
+    rng = np.random.default_rng(3)
+    centre, half = np.array([[100.0, 200.0]]), np.array([[20.0, 50.0]])
+    cov = np.zeros((1, 2, 2, 2))
+    cov[0, 0] = [[64.0, 12.0], [12.0, 9.0]]
+    cov[0, 1] = [[150.0, -20.0], [-20.0, 30.0]]
+    reported = np.array([[85.0, 155.0, 38.0, 100.0]])
+    p = overlap_probability(centre, half, cov, reported)[0]
+    n = 200_000
+    x = np.stack([rng.multivariate_normal([centre[0, a], half[0, a]], cov[0, a], n)
+                  for a in range(2)], axis=1)  # (n, axis, (c, s))
+    lo = np.maximum(x[:, :, 0] - x[:, :, 1], reported[0, :2])
+    hi = np.minimum(x[:, :, 0] + x[:, :, 1], reported[0, :2] + reported[0, 2:])
+    inter = np.prod(np.clip(hi - lo, 0, None), axis=1)
+    union = 4 * x[:, 0, 1] * x[:, 1, 1] + reported[0, 2] * reported[0, 3] - inter
+    truth = np.mean(inter >= 0.5 * union)
+    assert 0.2 < truth < 0.8  # a case where the spread matters
+    se = np.sqrt(truth * (1 - truth) * (1 / DRAWS + 1 / n))
+    assert abs(p - truth) < 4 * se
+
+
+def test_box_covariances_of_a_mixture():
+    """Two equal components of one slot: the covariance of (centre, half-size) is the mean
+    of theirs plus the spread of their means."""
+    mean = np.zeros((2, 2, 3))
+    mean[0, 0] = [10.0, 0.0, 4.0]
+    mean[1, 0] = [14.0, 0.0, 6.0]
+    cov = np.zeros((2, 2, 3, 3))
+    cov[:, :, 0, 0], cov[:, :, 2, 2], cov[:, :, 0, 2] = 1.0, 2.0, 0.5
+    cov[:, :, 2, 0] = 0.5
+    label, mass = np.array([0, 0]), np.array([0.3, 0.3])
+    r, means = np.array([0.6]), np.array([[[12.0, 0.0, 5.0], [0.0, 0.0, 0.0]]])
+    out = box_covariances(label, mass, mean, cov, r, means, 1)
+    np.testing.assert_allclose(out[0, 0], [[1.0 + 4.0, 0.5 + 2.0], [0.5 + 2.0, 2.0 + 1.0]])
+    np.testing.assert_allclose(out[0, 1], [[1.0, 0.5], [0.5, 2.0]])
+
+
+def test_confidence_is_a_probability_below_existence():
+    """Every reported confidence is in [0, existence]: the object must exist and be there."""
+    tracker = Tracker(TrackerConfig(image_size=(640, 480), fps=10))
+    for t in range(12):
+        boxes = np.array([[100.0 + 5 * t, 100.0, 140.0 + 5 * t, 200.0],
+                          [400.0, 150.0, 440.0, 250.0]])
+        tracks = tracker.update(boxes if t % 4 != 3 else boxes[:1], timestamp=t / 10)
+        assert ((tracks.confidence >= 0) & (tracks.confidence <= tracks.existence + 1e-12)).all()
+    assert len(tracks) == 2 and (tracks.confidence > 0.5).all()
