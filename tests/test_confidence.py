@@ -113,3 +113,84 @@ def test_confidence_is_a_probability_below_existence():
         tracks = tracker.update(boxes if t % 4 != 3 else boxes[:1], timestamp=t / 10)
         assert ((tracks.confidence >= 0) & (tracks.confidence <= tracks.existence + 1e-12)).all()
     assert len(tracks) == 2 and (tracks.confidence > 0.5).all()
+
+
+def test_camera_motion_error_is_the_medians_standard_error():
+    """Eight people, all shifted by the camera's (30, -12) px plus their own steps: the
+    estimate is the median, its error sqrt(pi / 2) * 1.4826 * MAD / sqrt(8) per axis."""
+    from occtrack.tracker.camera import estimate_motion, matched_shifts
+
+    previous = np.array([[100.0 + 150 * i, 300.0, 40.0, 100.0] for i in range(8)])
+    own = np.array([[0.0, 1.0], [1.0, -1.0], [-2.0, 0.5], [3.0, 0.0], [0.5, 2.0], [-1.0, -2.0],
+                    [2.0, 1.5], [-0.5, 0.0]])
+    current = previous.copy()
+    current[:, :2] += np.array([30.0, -12.0]) + own
+    pairs = matched_shifts(previous, current)
+    np.testing.assert_allclose(pairs, np.array([30.0, -12.0]) + own)
+    shift, error = estimate_motion(previous, current)
+    np.testing.assert_allclose(shift, np.median(pairs, axis=0))
+    mad = np.median(np.abs(pairs - shift), axis=0)
+    np.testing.assert_allclose(error, np.sqrt(np.pi / 2) * 1.4826 * mad / np.sqrt(8))
+    assert estimate_motion(previous[:2], current[:2]) is None
+
+
+def test_a_camera_that_stops_pairing_up_widens_every_prediction():
+    """While the camera moves, a frame whose boxes do not pair up (too few) widens every
+    object's centre variance by the camera's recent mean square shift; a still camera's
+    frames widen them by nothing."""
+    def run(speed):
+        tracker = Tracker(TrackerConfig(image_size=(1920, 1080), fps=30))
+        base = np.array([[200.0 + 300 * i, 400.0, 60.0, 150.0] for i in range(5)])
+        for t in range(10):
+            tracker.step(base + np.array([speed * t, 0.0, 0.0, 0.0]), dt=1 / 30)
+        motion = tracker._camera_motion(np.zeros((0, 4)), 1 / 30)
+        return tracker, motion
+    still, (_, shift, variance) = run(0.0)
+    assert shift.tolist() == [0.0, 0.0] and variance.tolist() == [0.0, 0.0]
+    moving, (_, shift, variance) = run(20.0)
+    assert shift.tolist() == [0.0, 0.0]
+    assert variance[1] == 0.0 and 100.0 < variance[0] < 400.0  # (20 px)^2 remembered in part
+
+
+GT = "1,1,0,0,10,10,1,1,1\n1,2,100,0,10,10,1,1,1\n2,1,2,0,10,10,1,1,1\n2,2,100,0,10,10,1,1,1\n"
+# frame 1: both right (.9, .8); frame 2: one right (.6), one false box (.2), one at IoU 8/12
+# against pedestrian 2, right (1.0)
+RESULT = ("1,10,0,0,10,10,0.9,-1,-1,-1\n1,20,100,0,10,10,0.8,-1,-1,-1\n"
+          "2,10,2,0,10,10,0.6,-1,-1,-1\n2,30,300,0,10,10,0.2,-1,-1,-1\n"
+          "2,20,102,0,10,10,1,-1,-1,-1\n")
+
+
+def test_eval_calibration_prints_the_reliability_table(tmp_path, capsys):
+    """`occtrack eval --calibration`: the table's bins and ECE by hand (bins of 0.1:
+    .2 wrong, .6 right, .8 right, .9 right, 1.0 right: ECE (.2 + .4 + .2 + .1 + 0) / 5)."""
+    import json
+
+    from occtrack.cli import main
+
+    (tmp_path / "gt.txt").write_text(GT)
+    (tmp_path / "r.txt").write_text(RESULT)
+    assert main(["eval", str(tmp_path / "gt.txt"), str(tmp_path / "r.txt"),
+                 "--calibration"]) == 0
+    out = capsys.readouterr().out
+    assert "  [0.2, 0.3)         1    0.200    0.000" in out
+    assert "  [0.9, 1.0]         2    0.950    1.000" in out
+    assert "ECE 0.1800 over 5 boxes" in out
+    assert main(["eval", str(tmp_path / "gt.txt"), str(tmp_path / "r.txt"), "--calibration",
+                 "--json"]) == 0
+    table = json.loads(capsys.readouterr().out)["calibration"]
+    assert table["ece"] == pytest.approx(0.18) and table["boxes"] == [0, 0, 1, 0, 0, 0, 1, 0,
+                                                                       1, 2]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--protocol", "paper"], "--calibration decides which boxes are right as the mot17"),
+    ([], "line 2: confidence (column 7) 1.5 is not a probability in [0, 1]")])
+def test_eval_calibration_errors(tmp_path, capsys, argv, message):
+    from occtrack.cli import main
+
+    (tmp_path / "gt.txt").write_text(GT)
+    (tmp_path / "r.txt").write_text(RESULT.replace("0.8", "1.5"))
+    assert main(["eval", str(tmp_path / "gt.txt"), str(tmp_path / "r.txt"), "--calibration",
+                 *argv]) != 0
+    err = capsys.readouterr().err
+    assert message in err

@@ -198,10 +198,12 @@ def test_relax_survive_and_move_in_place_equal_their_array_forms():
     assert inside.any() and (~inside).any() and inside[:2].all() and not inside[2:4].any()
 
     scale, shift = np.array([1.1, 0.9]), np.array([-7.0, 12.5])
+    variance = np.array([4.0, 0.25])  # the shift's: it widens the centres only
     expected_mean = mean * scale[:, None]
     expected_mean[..., 0] += shift
     expected_cov = cov * scale[:, None, None] ** 2
-    gmpmb._move_in_place(mean, cov, scale, shift)
+    expected_cov[:, :, 0, 0] += variance
+    gmpmb._move_in_place(mean, cov, scale, shift, variance)
     np.testing.assert_allclose(mean, expected_mean, rtol=1e-14)
     np.testing.assert_allclose(cov, expected_cov, rtol=1e-14)
 

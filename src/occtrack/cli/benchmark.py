@@ -14,8 +14,8 @@ occlusion model (none, measurement-wise, object-wise; every other setting the de
 with the box-only peers of Roboflow's `trackers` package (sort, bytetrack, ocsort, botsort,
 cbiou; library defaults, the sequence's frame rate, every frame; BoT-SORT without its
 camera-motion step, which needs the images), score each result under the mot17 protocol
-(TrackEval) and print a table per sequence: HOTA, IDF1, MOTA, DetA, AssA, LocA, FP, FN, IDSW
-and the frames per second of the tracker call (scoring not counted). With more than one
+(TrackEval) and print a table per sequence: HOTA, IDF1, MOTA, DetA, AssA, LocA, FP, FN, IDSW,
+ECE and the frames per second of the tracker call (scoring not counted). With more than one
 sequence, two tables follow: TrackEval's COMBINED_SEQ scores (counts summed, HOTA and its parts
 from the summed counts, as MOTChallenge reports a benchmark) and the plain mean over sequences.
 
@@ -36,10 +36,12 @@ of the tables):
    "sequences": {NAME: {"folder", "frames", "fps", "image_size": [w, h],
                         "trackers": {TRACKER: SCORES}}},
    "combined": {"method", "trackers": {TRACKER: SCORES}},
-   "mean": {"method", "trackers": {TRACKER: {hota, idf1, mota, deta, assa, loca, motp}}}}
+   "mean": {"method", "trackers": {TRACKER: {hota, idf1, mota, deta, assa, loca, motp, ece}}}}
 SCORES holds hota, idf1, mota, motp, deta, assa, loca (fractions in [0, 1], MOTA can be
-negative), mostly_tracked, mostly_lost, fp, fn, id_switches, tracks (counts), seconds and
-frames_per_second of the tracker call.
+negative), ece (the expected calibration error of the result's confidence column, as
+`occtrack eval --calibration` prints it; combined: of all boxes pooled), mostly_tracked,
+mostly_lost, fp, fn, id_switches, tracks (counts), seconds and frames_per_second of the
+tracker call.
 
 What `occtrack report` draws is added to each sequence on request, on the boxes the mot17
 protocol scores, lists with one entry a frame (entry t is frame t + 1):

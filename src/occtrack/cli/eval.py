@@ -47,8 +47,19 @@ in percent as TrackEval gives them) and DIR/pedestrian_detailed.csv (every field
 each of its 19 thresholds too, a row for the sequence and one for COMBINED), for tools that
 read TrackEval's output. --out-dir - prints the summary file instead of the table.
 
+--calibration (mot17) also prints the reliability table of the result's confidence column
+(the 7th: a probability in [0, 1], as occtrack track writes it; a peer's detector score works
+too): the result boxes binned by confidence into 10 equal bins, per bin the boxes, their mean
+confidence and the share right, and the expected calibration error
+ECE = sum over bins of (boxes / all boxes) |mean confidence - share right|. A box is right when
+it is matched one to one to a true pedestrian at IoU >= 0.5 (boxes on distractors left out, as
+the protocol does); a confidence that keeps its word has ECE near 0. With --json the object
+gains "calibration": {"ece", "bins", "boxes", "confidence", "right"} (lists a bin, null for an
+empty bin).
+
 examples:
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt
+  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --calibration
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --protocol paper --json
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --out-dir scores/"""
 
@@ -105,6 +116,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              f"{DAY_AT_30_FPS}, a day at 30 fps)")
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object instead of the table")
+    parser.add_argument("--calibration", action="store_true",
+                        help="also print the reliability table and ECE of the confidence "
+                             "column (mot17; see above)")
     parser.add_argument("--out-dir", metavar="DIR",
                         help="also write TrackEval's pedestrian_summary.txt and "
                              "pedestrian_detailed.csv here (mot17; '-': print the summary)")
@@ -181,6 +195,9 @@ def run(args: argparse.Namespace) -> int:
     from occtrack.metrics.evaluate import check_truth, evaluate_frames
 
     start = time.perf_counter()
+    if args.calibration and args.protocol != "mot17":
+        raise OcctrackError("--calibration decides which boxes are right as the mot17 protocol "
+                            "does; use --protocol mot17")
     out_files = _out_files(args)
     num_frames = _num_frames(args)
     gap = args.max_gap_frames if num_frames is None else None
@@ -199,6 +216,7 @@ def run(args: argparse.Namespace) -> int:
         trackeval_results = sequence_results(frames.trackeval)
         texts = output_files({_sequence_name(args): trackeval_results})
     values = evaluate_frames(frames, gt, result, trackeval_results)
+    table = _calibration(args, frames, result) if args.calibration else None
     seconds = time.perf_counter() - start
 
     if out_files == {}:
@@ -212,7 +230,8 @@ def run(args: argparse.Namespace) -> int:
             with atomic_write(path, args.force) as fh:
                 fh.write(texts[name])
     if args.json:
-        print(json.dumps(values))
+        print(json.dumps(values if table is None else {**values,
+                                                        "calibration": table.as_dict()}))
         return 0
     notes = {**NOTES[args.protocol], **COMMON_NOTES}
     print(f"{args.result} against {args.gt}")
@@ -221,8 +240,40 @@ def run(args: argparse.Namespace) -> int:
     for key in KEYS:
         print(f"  {LABELS[key]:<18} {_format(key, values[key]):>10}   {notes[key]}")
     print()
+    if table is not None:
+        print(format_reliability(table))
+        print()
     print(f"scored {frames.num_frames} frames, {frames.num_truth} true boxes, "
           f"{frames.num_estimates} result boxes, {seconds:.2f} s")
     if out_files:
         print(f"TrackEval's files: {', '.join(str(p) for p in out_files.values())}")
     return 0
+
+
+def _calibration(args: argparse.Namespace, frames, result):
+    """The reliability table of the result's confidence column, which must hold
+    probabilities."""
+    import numpy as np
+
+    from occtrack.metrics.reliability import reliability
+
+    bad = np.flatnonzero(~((result.score >= 0) & (result.score <= 1)))
+    if len(bad):
+        line = bad[0] if result.line is None else result.line[bad[0]]
+        raise OcctrackError(f"line {line}: confidence (column 7) {result.score[bad[0]]} is not "
+                            f"a probability in [0, 1], which --calibration needs", args.result)
+    return reliability(frames, result.score)
+
+
+def format_reliability(table) -> str:
+    """The reliability table as text: one line a bin, then the ECE."""
+    lines = ["  calibration of the confidence column (right: matched at IoU >= 0.5)",
+             f"  {'confidence':<12}{'boxes':>8}{'mean':>9}{'right':>9}"]
+    for b in range(len(table.boxes)):
+        lo, hi = table.edges[b], table.edges[b + 1]
+        close = "]" if b == len(table.boxes) - 1 else ")"
+        mean = "-" if table.boxes[b] == 0 else f"{table.confidence[b]:.3f}"
+        right = "-" if table.boxes[b] == 0 else f"{table.right[b]:.3f}"
+        lines.append(f"  [{lo:.1f}, {hi:.1f}{close}  {int(table.boxes[b]):>8}{mean:>9}{right:>9}")
+    lines.append(f"  ECE {table.ece:.4f} over {table.num_boxes} boxes")
+    return "\n".join(lines)

@@ -35,6 +35,7 @@ from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable, read_mot, read_seqinfo
 from occtrack.metrics.gospa import gospa_from_distances
 from occtrack.metrics.protocols import GOSPA_C, GOSPA_P, ScoredFrames, scored_frames
+from occtrack.metrics.reliability import pooled_ece, reliability
 from occtrack.metrics.trackeval_mot17 import combined_results, sequence_results, summary
 from occtrack.progress import progress
 from occtrack.tracker import Tracker, TrackerConfig
@@ -49,8 +50,8 @@ MEAN_METHOD = "plain mean over sequences of each sequence's number"
 COLUMNS = (("hota", "HOTA", ".3f"), ("idf1", "IDF1", ".3f"), ("mota", "MOTA", ".3f"),
            ("deta", "DetA", ".3f"), ("assa", "AssA", ".3f"), ("loca", "LocA", ".3f"),
            ("fp", "FP", "d"), ("fn", "FN", "d"), ("id_switches", "IDSW", "d"),
-           ("frames_per_second", "frames/s", ".0f"))
-FRACTIONS = ("hota", "idf1", "mota", "deta", "assa", "loca", "motp")
+           ("ece", "ECE", ".3f"), ("frames_per_second", "frames/s", ".0f"))
+FRACTIONS = ("hota", "idf1", "mota", "deta", "assa", "loca", "motp", "ece")
 # The state of a reported box kept with `keep_boxes` (occtrack's trackers only: a peer reports
 # the detection boxes its tracks took).
 DETECTED, COASTING, OCCLUDED = 0, 1, 2
@@ -231,9 +232,12 @@ def run_job(job: Job) -> dict:
     spent = time.perf_counter() - start
     scored = scored_frames(seq.gt, result, PROTOCOL, seq.length)
     results = sequence_results(scored.trackeval)
+    calibration = reliability(scored, result.score)
     out = {"results": results,
-           "scores": {**summary(results), "tracks": int(len(np.unique(result.id))),
-                      "seconds": spent, "frames_per_second": seq.length / max(spent, 1e-9)}}
+           "scores": {**summary(results), "ece": calibration.ece,
+                      "tracks": int(len(np.unique(result.id))),
+                      "seconds": spent, "frames_per_second": seq.length / max(spent, 1e-9)},
+           "calibration": calibration}
     if job.per_frame or job.keep_boxes:
         out["truth"] = [int(len(rows)) for rows in scored.truth_rows]
         out["per_frame"] = per_frame_counts(scored)
@@ -293,11 +297,13 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
         raise OcctrackError(f"{len(failed)} of {len(jobs)} runs failed (the others finished): "
                             + "; ".join(failed))
     raw: dict[str, list[dict]] = {name: [] for name in trackers}
+    calibrations: dict[str, list] = {name: [] for name in trackers}
     seconds: dict[str, float] = dict.fromkeys(trackers, 0.0)
     report: dict = {"protocol": PROTOCOL, "trackers": list(trackers), "sequences": {}}
     for job, seq in zip(jobs, (seq for seq in sequences for _ in trackers), strict=True):
         name, out = job.tracker, done[job]
         raw[name].append(out["results"])
+        calibrations[name].append(out["calibration"])
         seconds[name] += out["scores"]["seconds"]
         entry = report["sequences"].setdefault(seq.name, {
             "folder": str(seq.folder), "frames": seq.length, "fps": seq.fps,
@@ -318,6 +324,7 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
         per_seq = [report["sequences"][seq.name]["trackers"][name] for seq in sequences]
         report["combined"]["trackers"][name] = {
             **summary(combined_results(raw[name])),
+            "ece": pooled_ece(calibrations[name]),
             "tracks": sum(values["tracks"] for values in per_seq),
             "seconds": seconds[name], "frames_per_second": frames / max(seconds[name], 1e-9)}
         report["mean"]["trackers"][name] = {

@@ -218,11 +218,12 @@ class GaussianMixturePMB:
         return self.slot_used & (self.slot_hits >= self.config.confirm_hits)
 
     def step(self, z: np.ndarray, scores: np.ndarray,
-             camera: tuple[np.ndarray, np.ndarray] | None = None, dt: float | None = None,
+             camera: tuple[np.ndarray, ...] | None = None, dt: float | None = None,
              classes: np.ndarray | None = None) -> None:
         """Move with the camera, predict to this frame, add births, update with its
-        detections z (M, 2, 2). `camera` is (scale (2,), shift (2,)): the image point x of
-        the last frame is at scale * x + shift in this one. `dt` is the time since the last
+        detections z (M, 2, 2). `camera` is (scale (2,), shift (2,)[, shift variance (2,)]):
+        the image point x of the last frame is at scale * x + shift in this one, the shift
+        known to within its variance (px^2; `move_image`). `dt` is the time since the last
         step in seconds (default `config.dt`); `classes` (M,) the detections' classes: an
         object takes only detections of its own class (None: one class)."""
         self._use_dt(self.config.dt if dt is None else float(dt))
@@ -255,12 +256,15 @@ class GaussianMixturePMB:
 
     # -- prediction -----------------------------------------------------------------------
 
-    def move_image(self, scale: np.ndarray, shift: np.ndarray) -> None:
+    def move_image(self, scale: np.ndarray, shift: np.ndarray,
+                   shift_variance: np.ndarray | None = None) -> None:
         """Carry every component along an image motion x -> scale * x + shift per axis:
-        centres move, velocities and half-sizes scale, covariances scale by scale^2."""
+        centres move, velocities and half-sizes scale, covariances scale by scale^2. An
+        uncertain shift (its variance per axis, px^2) widens every centre by that variance."""
         n = self.n
+        variance = np.zeros(2) if shift_variance is None else np.asarray(shift_variance, float)
         _move_in_place(self.mean[:n], self.cov[:n], np.asarray(scale, dtype=float),
-                       np.asarray(shift, dtype=float))
+                       np.asarray(shift, dtype=float), variance)
 
     def _predict(self) -> None:
         n = self.n
@@ -1195,9 +1199,9 @@ def _survive_in_place(mass, mean, image_size, survival_inside, exit_survival):
 
 
 @njit
-def _move_in_place(mean, cov, scale, shift):
+def _move_in_place(mean, cov, scale, shift, shift_variance):
     """x -> scale x + shift per axis: centres move, velocities and half-sizes scale,
-    covariances scale by scale^2."""
+    covariances scale by scale^2; the shift's own variance adds to every centre's."""
     for k in range(len(mean)):
         for axis in range(2):
             for r in range(mean.shape[2]):
@@ -1205,6 +1209,7 @@ def _move_in_place(mean, cov, scale, shift):
                 for c in range(mean.shape[2]):
                     cov[k, axis, r, c] *= scale[axis] ** 2
             mean[k, axis, 0] += shift[axis]
+            cov[k, axis, 0, 0] += shift_variance[axis]
 
 
 @njit

@@ -89,7 +89,7 @@ def reliability_table(confidence: np.ndarray, right: np.ndarray, bins: int = BIN
     if bins < 1:
         raise ValueError(f"bins must be at least 1, not {bins}")
     edges = np.linspace(0.0, 1.0, bins + 1)
-    which = np.clip(np.searchsorted(edges, confidence, side="right") - 1, 0, bins - 1)
+    which = np.minimum(np.floor(confidence * bins).astype(np.int64), bins - 1)
     count = np.bincount(which, minlength=bins)
     total_conf = np.bincount(which, weights=confidence, minlength=bins)
     total_right = np.bincount(which, weights=right.astype(float), minlength=bins)
@@ -106,3 +106,14 @@ def reliability(frames: ScoredFrames, confidence: np.ndarray, bins: int = BINS) 
     result table's confidence column (one entry a row of the result table)."""
     rows, right = right_boxes(frames)
     return reliability_table(np.asarray(confidence, dtype=float)[rows], right, bins)
+
+
+def pooled_ece(tables: list[Reliability]) -> float:
+    """The ECE of the boxes of several tables (same bins) taken together: per bin the summed
+    confidences against the summed right boxes."""
+    if not tables:
+        return 0.0
+    conf = sum(np.nan_to_num(t.confidence * t.boxes) for t in tables)
+    right = sum(np.nan_to_num(t.right * t.boxes) for t in tables)
+    n = max(sum(t.num_boxes for t in tables), 1)
+    return float(np.abs(conf - right).sum() / n)

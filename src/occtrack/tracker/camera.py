@@ -66,15 +66,39 @@ def estimate_shift(previous: np.ndarray, current: np.ndarray, height_ratio: floa
                    min_pairs: int = 3) -> np.ndarray | None:
     """The image translation (dx, dy) in px from the boxes of the previous frame to the
     current one, both (N, 4) left, top, width, height; None when too few boxes pair up."""
+    pairs = matched_shifts(previous, current, height_ratio, mode_radius, min_iou, min_pairs)
+    return None if pairs is None else _median_rows(pairs)
+
+
+def estimate_motion(previous: np.ndarray, current: np.ndarray,
+                    **settings) -> tuple[np.ndarray, np.ndarray] | None:
+    """`estimate_shift` and how well the detections pin it: (shift (2,), standard error (2,))
+    in px, None when too few boxes pair up. The matched pairs' displacements are the camera's
+    shift plus each person's own step; the median of P of them has the standard error
+    sqrt(pi / 2) sigma / sqrt(P) (normal steps), sigma their spread by the median absolute
+    deviation (1.4826 MAD), robust to the pairs that are no match."""
+    pairs = matched_shifts(previous, current, **settings)
+    if pairs is None:
+        return None
+    shift = _median_rows(pairs)
+    sigma = 1.4826 * np.median(np.abs(pairs - shift), axis=0)
+    return shift, math.sqrt(math.pi / 2.0) * sigma / math.sqrt(len(pairs))
+
+
+def matched_shifts(previous: np.ndarray, current: np.ndarray, height_ratio: float = 1.25,
+                   mode_radius: float = 0.05, min_iou: float = 0.5,
+                   min_pairs: int = 3) -> np.ndarray | None:
+    """Steps 1-3 up to the median: the displacements (P, 2) of the box pairs matched after
+    the mode, in the order of the previous boxes; None when fewer than `min_pairs`."""
     if len(previous) < min_pairs or len(current) < min_pairs:
         return None
     if len(previous) * len(current) > DENSE_PAIRS:
         return _estimate_sparse(previous, current, height_ratio, mode_radius, min_iou,
                                 min_pairs)
-    found, shift = _estimate_dense(np.asarray(previous, dtype=float),
+    found, pairs = _estimate_dense(np.asarray(previous, dtype=float),
                                    np.asarray(current, dtype=float), height_ratio, mode_radius,
                                    min_iou, min_pairs)
-    return shift if found else None
+    return pairs if found else None
 
 
 @njit
@@ -98,7 +122,7 @@ def _iou(a, i, b, j):
 
 @njit
 def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_pairs):
-    """Steps 1-3 over every pair of boxes: (found, shift)."""
+    """Steps 1-3 over every pair of boxes: (found, the matched pairs' displacements)."""
     N, M = len(previous), len(current)
     cp = previous[:, :2] + previous[:, 2:] / 2.0
     cc = current[:, :2] + current[:, 2:] / 2.0
@@ -112,7 +136,7 @@ def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_p
                 unit[C] = math.sqrt(previous[i, 3] * current[j, 3])
                 C += 1
     if C < min_pairs:
-        return False, np.zeros(2)
+        return False, np.zeros((0, 2))
     mode = _mode_shift(candidates[:C], mode_radius * unit[:C])  # 2. the mode
     moved = previous.copy()  # 3. mutual best IoU after the mode, and the median
     moved[:, 0] += mode[0]
@@ -132,13 +156,13 @@ def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_p
             pairs[P, 0], pairs[P, 1] = cc[j, 0] - cp[i, 0], cc[j, 1] - cp[i, 1]
             P += 1
     if P < min_pairs:
-        return False, np.zeros(2)
-    return True, _median_rows(pairs[:P])
+        return False, np.zeros((0, 2))
+    return True, pairs[:P]
 
 
 def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: float,
                      mode_radius: float, min_iou: float, min_pairs: int) -> np.ndarray | None:
-    """`estimate_shift` on the pairs that can qualify only; the same result."""
+    """`matched_shifts` on the pairs that can qualify only; the same result."""
     previous, current = np.asarray(previous, dtype=float), np.asarray(current, dtype=float)
     cp, cc = _centres(previous), _centres(current)
     candidates, unit = _candidates_within_reach(previous, current, cp, cc, height_ratio)
@@ -151,7 +175,7 @@ def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: fl
     shifts = _mutual_shifts(p, c, moved, current, cp, cc, min_iou)
     if len(shifts) < min_pairs:
         return None
-    return _median_rows(shifts)
+    return shifts
 
 
 def sparse_candidates(previous: np.ndarray, current: np.ndarray,

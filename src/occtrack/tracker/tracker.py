@@ -20,6 +20,7 @@ for life, that of the detection it was born from, and takes only detections of t
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Iterable, Iterator
@@ -48,9 +49,11 @@ from occtrack.tracker.boxes import (
     from_ltwh,
     to_ltwh,
 )
-from occtrack.tracker.camera import estimate_shift
+from occtrack.tracker.camera import estimate_motion
 from occtrack.tracker.confidence import box_covariances, overlap_probability
 
+CAMERA_MEMORY = 1.0
+"""s: the time constant of the camera's remembered speed (`Tracker.step`)."""
 OCCLUDED_ABOVE = 0.5
 """A missed object is reported as occluded when the probability that occlusion caused its miss
 is above this."""
@@ -170,6 +173,7 @@ class Tracker:
         self._next_id = 1
         self._boxes = np.zeros((0, 4))  # the last step's detections (camera shift, reports)
         self._timestamp: float | None = None
+        self._camera_power = np.zeros(2)
 
     def update(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
                classes: npt.ArrayLike | None = None, timestamp: float | None = None,
@@ -252,12 +256,25 @@ class Tracker:
                 raise ValueError("camera_motion must be a finite 2 x 3 affine matrix")
             camera = (np.diag(affine[:, :2]).copy(), affine[:, 2].copy())
         elif self.config.camera_motion == "detections":
-            shift = estimate_shift(self._boxes, boxes)
-            if shift is not None:
-                camera = (np.ones(2), shift)
+            camera = self._camera_motion(boxes, self.config.dt if dt is None else dt)
         self.filter.step(edges_from_ltwh(boxes), scores, camera, dt=dt, classes=labels)
         self._boxes = boxes
         return self.tracks()
+
+    def _camera_motion(self, boxes: np.ndarray, dt: float) -> tuple[np.ndarray, ...]:
+        """The camera's shift from the last frame's detections to these, and its variance:
+        the estimate's own (how well the detections pin it, `estimate_motion`) or, where
+        too few boxes pair up and the shift is taken as 0, the camera's recent mean square
+        shift (how fast it has been moving: an exponential average over `CAMERA_MEMORY`
+        seconds). Every prediction widens by that variance, coasting boxes included, so a
+        camera that turns makes their confidence fall (a still camera: about 0)."""
+        motion = estimate_motion(self._boxes, boxes)
+        if motion is None:
+            return np.ones(2), np.zeros(2), self._camera_power.copy()
+        shift, error = motion
+        keep = math.exp(-dt / CAMERA_MEMORY)
+        self._camera_power = keep * self._camera_power + (1.0 - keep) * shift ** 2
+        return np.ones(2), shift, error ** 2
 
     def tracks(self) -> Tracks:
         """The objects reported now, by id: existence above `report_existence`, and either
@@ -281,9 +298,11 @@ class Tracker:
         n = f.n
         cov = box_covariances(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                               len(r))[shown]
-        chosen = means[shown]
-        confidence = existence * overlap_probability(chosen[:, :, 0], chosen[:, :, 2], cov,
-                                                     boxes)
+        centre, half = means[shown][:, :, 0], means[shown][:, :, 2]
+        detected = index >= 0  # the detection's box is the estimate, the posterior its spread
+        centre[detected] = boxes[detected, :2] + boxes[detected, 2:] / 2.0
+        half[detected] = boxes[detected, 2:] / 2.0
+        confidence = existence * overlap_probability(centre, half, cov, boxes)
         return Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
                       occluded, confidence)
 
