@@ -22,7 +22,8 @@ Track pedestrians (or any boxes) through a MOTChallenge detection file with the
 Gaussian-mixture Poisson multi-Bernoulli tracker, and write a MOTChallenge result file
 (frame,id,left,top,width,height,confidence,-1,-1,-1), one row per reported object and frame.
 The confidence is the probability that the box is a real object at that place (exists and
-overlaps the true box at IoU >= 0.5): a calibrated probability (`occtrack eval --calibration`).
+overlaps the true box at IoU >= 0.5); `occtrack eval --calibration` measures how well it
+keeps its word.
 
 Detection rows are frame,id,left,top,width,height,score[,...] (the id is ignored). Occlusion:
   none              a missed detection is evidence that the object is gone

@@ -9,8 +9,10 @@ the benchmarks mean: a real object whose true box overlaps the reported one at I
 with r_i the object's existence, b_i the reported box (the detection it took, or the filter's
 mean box while it coasts) and p_i its posterior box density, moment-matched to one Gaussian
 per image axis over (centre, half-size). A coasting box whose prediction has spread (time
-unseen, a camera that moves) is right less often, and its confidence says so; a detected box
-is as sure as the detection's place in the posterior.
+unseen, a camera that moves) is right less often, and its confidence says so. For a detected
+box the Gaussian is centred on the detection itself (the reported estimate; a detection cut
+by the image border would otherwise be compared with a posterior box that runs past it) with
+the posterior's spread (`Tracker.tracks`).
 
 The overlap probability has no closed form (IoU is a ratio of piecewise-linear areas), so it
 is a Monte Carlo average over `DRAWS` fixed standard-normal draws, the same for every box and

@@ -70,8 +70,8 @@ class Tracks:
         existence: (n,) probability that each object exists.
         confidence: (n,) probability that each box is a real object at that place: the
             object exists and its true box overlaps the reported one at IoU >= 0.5
-            (`occtrack.tracker.confidence`); a calibrated probability, the 7th column of
-            every result file.
+            (`occtrack.tracker.confidence`), the 7th column of every result file; how well it
+            keeps its word is measured by `occtrack eval --calibration` (README).
         velocities: (n, 2) velocity of each box centre, px / s.
         detection_index: (n,) int, the index of the detection each object took this frame
             (into the boxes given to `update` / `step`), -1 for an object reported without one
