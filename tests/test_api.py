@@ -392,7 +392,31 @@ def test_a_given_zoom_scales_the_states():
         tracker.step(_people())
     tracks = tracker.step(_people(zoom=2.0), camera_motion=[[2.0, 0, 0], [0, 2.0, 0]])
     assert np.abs(tracks.velocities).max() < 5.0  # px / s
-    np.testing.assert_allclose(tracks.boxes, _people(zoom=2.0))
+    zoomed = _people(zoom=2.0)
+    np.testing.assert_allclose(tracks.boxes[:2], zoomed[:2])
+    # the third now lies past the image's right border (x > 1920): its right edge is not
+    # measured, and the state's edge, a little farther out, is reported there
+    np.testing.assert_allclose(tracks.boxes[2, [0, 1, 3]], zoomed[2, [0, 1, 3]])
+    assert zoomed[2, 2] < tracks.boxes[2, 2] < 1.05 * zoomed[2, 2]
+
+
+def test_a_box_cut_by_the_image_border_is_reported_with_the_states_outer_edge():
+    """A person walking out at the right border: the detector clips the box at x = 1920, the
+    filter leaves that edge unmeasured, and the reported box takes the state's right edge past
+    the border (the true box runs on, as MOTChallenge's ground truth does) with the
+    detection's other three edges; a person inside the image is reported as detected."""
+    tracker = Tracker(TrackerConfig(camera_motion="none"))
+    inside = np.array([600.0, 400.0, 80.0, 200.0])
+    for t in range(34):  # the last one 22 px inside the image
+        left = 1700.0 + 6.0 * t
+        walker = np.array([left, 420.0, min(80.0, 1920.0 - left), 200.0])
+        tracks = tracker.step(np.stack([inside, walker]))
+    assert tracks.detection_index.tolist() == [0, 1]
+    np.testing.assert_array_equal(tracks.boxes[0], inside)
+    left = 1700.0 + 6.0 * 33
+    np.testing.assert_array_equal(tracks.boxes[1, [0, 1, 3]], [left, 420.0, 200.0])
+    right = left + tracks.boxes[1, 2]  # the walker's true right edge: left + 80 = 1978
+    assert 1960.0 < right < 2000.0
 
 
 @pytest.mark.parametrize("motion", [np.eye(2), np.zeros((2, 4)), [[1, 0, np.nan], [0, 1, 0]]])

@@ -83,7 +83,7 @@ def test_the_old_keys_are_kept_and_the_new_are_asked_for(run, tmp_path):
     plain, frames = json.loads(plain.read_text()), json.loads(frames.read_text())
     assert set(plain) == {"protocol", "trackers", "sequences", "combined", "mean"}
     entry = plain["sequences"]["SYN-A"]
-    assert set(entry) == {"folder", "frames", "fps", "image_size", "trackers"}
+    assert set(entry) == {"folder", "frames", "fps", "image_size", "trackers", "calibration"}
     assert set(frames["sequences"]["SYN-A"]) == set(entry) | {"per_frame"}
     assert set(kept["sequences"]["SYN-A"]) == set(entry) | {"per_frame", "boxes"}
     for report in (frames, kept):
@@ -108,7 +108,7 @@ def test_the_page_holds_every_table_and_fetches_nothing(run):
     for name in ("SYN-A (1280x720, 10 fps, 40 frames)", "SYN-B (1280x720, 10 fps, 40 frames)",
                  "Combined over 2 sequences", "Mean over 2 sequences"):
         assert name in page
-    for title in ("HOTA", "IDF1", "MOTA", "DetA", "AssA", "LocA", "FP", "FN", "IDSW",
+    for title in ("HOTA", "IDF1", "MOTA", "DetA", "AssA", "LocA", "FP", "FN", "IDSW", "ECE",
                   "frames/s"):
         assert f">{title}</th>" in page
     for values, table in [*((entry["trackers"], tables[2 + i])
@@ -122,9 +122,41 @@ def test_the_page_holds_every_table_and_fetches_nothing(run):
                              f"{scores['mota']:.3f}", f"{scores['deta']:.3f}",
                              f"{scores['assa']:.3f}", f"{scores['loca']:.3f}",
                              str(scores["fp"]), str(scores["fn"]),
-                             str(scores["id_switches"]),
+                             str(scores["id_switches"]), f"{scores['ece']:.3f}",
                              f"{scores['frames_per_second']:.0f}"]
     assert page.count('<svg class="chart"') == 2 * 2 and page.count("<canvas") == 2
+    assert page.count('<svg class="diagram"') == 1 + 2  # combined, one a sequence
+
+
+def test_the_reliability_diagrams_are_the_reports_tables(run):
+    """Each reliability diagram draws a dot per non-empty bin at (mean confidence, share
+    right) of the JSON's table; the combined table pools the sequences' boxes bin by bin,
+    and its ECE is the combined ECE column's."""
+    _, report, page = run
+    figures = re.findall(r'<svg class="diagram".*?</svg>', page, flags=re.S)
+    entries = [report["combined"], *report["sequences"].values()]
+    for figure, entry in zip(figures, entries, strict=True):
+        for tracker in TRACKERS:
+            table = entry["calibration"][tracker]
+            group = re.search(rf'<g data-tracker="{re.escape(tracker)}">(.*?)</g>', figure,
+                              flags=re.S).group(1)
+            dots = re.findall(r"<title>[^:]*: (\d+) boxes, confidence ([\d.]+), right "
+                              r"([\d.]+)</title>", group)
+            expected = [(str(b), f"{c:.3f}", f"{r:.3f}") for b, c, r in
+                        zip(table["boxes"], table["confidence"], table["right"], strict=True)
+                        if b]
+            assert dots == expected and dots
+    for tracker in TRACKERS:
+        parts = [s["calibration"][tracker] for s in report["sequences"].values()]
+        pooled = report["combined"]["calibration"][tracker]
+        boxes = np.sum([p["boxes"] for p in parts], axis=0)
+        assert pooled["boxes"] == boxes.tolist()
+        right = np.sum([np.nan_to_num(np.array(p["right"], float) * p["boxes"])
+                        for p in parts], axis=0)
+        share = np.array(pooled["right"], float)
+        np.testing.assert_allclose(share[boxes > 0] * boxes[boxes > 0], right[boxes > 0],
+                                   atol=1e-4)
+        assert pooled["ece"] == pytest.approx(report["combined"]["trackers"][tracker]["ece"])
     data = json.loads(re.search(r'<script type="application/json" id="occtrack-data">(.*?)'
                                 r"</script>", page, flags=re.S).group(1))
     assert all(s["boxes"]["trackers"].keys() == set(TRACKERS) for s in data["sequences"])

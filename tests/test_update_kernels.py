@@ -736,10 +736,11 @@ def test_merge_packed(seed, n, M, spread):
 
 def tracks_reference(r, means, centre_std, used, took, coast, serial, reported_serial,
                      report_id, next_id, min_existence, coast_time, max_centre_std, boxes_in,
-                     hidden, classes):
+                     hidden, classes, border):
     """The old body of `Tracker.tracks` after `object_moments`: (ids, boxes, existence,
     velocities, detection index, class, occluded, next id); report_id and reported_serial
-    in place."""
+    in place. A detection's edge at or past `border` (per axis lowest, highest measured
+    coordinate) gives way to the state's when that lies farther out."""
     height = np.maximum(2.0 * means[:, 1, 2], 1.0)
     trusted = (took >= 0) | ((coast <= coast_time + 1e-9)
                              & (centre_std.max(axis=1) < max_centre_std * height))
@@ -756,7 +757,14 @@ def tracks_reference(r, means, centre_std, used, took, coast, serial, reported_s
     boxes = np.concatenate([c - s, 2.0 * s], axis=-1)
     index = took[shown]
     detected = index >= 0
-    boxes[detected] = boxes_in[index[detected]]
+    state_lo = boxes[detected, :2]
+    state_hi = state_lo + boxes[detected, 2:]
+    lo, size = boxes_in[index[detected], :2], boxes_in[index[detected], 2:]
+    out = (lo <= border[:, 0]) & (state_lo < lo)
+    lo, size = np.where(out, state_lo, lo), np.where(out, size + (lo - state_lo), size)
+    out = (lo + size >= border[:, 1]) & (state_hi > lo + size)
+    size = np.where(out, state_hi - lo, size)
+    boxes[detected] = np.concatenate([lo, size], axis=-1)
     occluded = ~detected & (hidden[shown] > OCCLUDED_ABOVE)
     return (ids[order], boxes, r[shown], means[shown, :, 1].copy(), index,
             classes[shown].copy(), occluded, next_id)
@@ -785,13 +793,16 @@ def test_reported(seed, n, M):
     hidden[rng.random(L) < 0.2] = OCCLUDED_ABOVE
     classes = rng.integers(0, 3, L)
     rules = (0.3, 1.0, 0.4)
+    border = np.array([[20.0, 380.0], [40.0, 360.0]])  # (a share of the boxes touch it)
+    boxes_in[rng.random(M) < 0.3, 0] = 20.0  # (on the border exactly)
 
     e_serial, e_id = reported_serial.copy(), report_id.copy()
     expected = tracks_reference(r, means, centre_std, used, took, coast, serial, e_serial,
-                                e_id, next_id, *rules, boxes_in, hidden, classes)
+                                e_id, next_id, *rules, boxes_in, hidden, classes, border)
     shown, got_next = _reported(r, means, centre_std, used, took, coast, serial,
                                 reported_serial, report_id, next_id, *rules)
-    rows = _report_rows(shown, r, means, took, boxes_in, hidden, classes, OCCLUDED_ABOVE)
+    rows = _report_rows(shown, r, means, took, boxes_in, hidden, classes, OCCLUDED_ABOVE,
+                        border)
     assert got_next == expected[-1]
     equal([report_id[shown], *rows, reported_serial, report_id],
           [*expected[:-1], e_serial, e_id])

@@ -34,14 +34,16 @@ seqinfo.ini (image size, frame rate, length), as MOT17's do. The peers need the 
 of the tables):
   {"protocol": "mot17", "trackers": [names],
    "sequences": {NAME: {"folder", "frames", "fps", "image_size": [w, h],
-                        "trackers": {TRACKER: SCORES}}},
-   "combined": {"method", "trackers": {TRACKER: SCORES}},
+                        "trackers": {TRACKER: SCORES}, "calibration": {TRACKER: TABLE}}},
+   "combined": {"method", "trackers": {TRACKER: SCORES}, "calibration": {TRACKER: TABLE}},
    "mean": {"method", "trackers": {TRACKER: {hota, idf1, mota, deta, assa, loca, motp, ece}}}}
 SCORES holds hota, idf1, mota, motp, deta, assa, loca (fractions in [0, 1], MOTA can be
 negative), ece (the expected calibration error of the result's confidence column, as
 `occtrack eval --calibration` prints it; combined: of all boxes pooled), mostly_tracked,
 mostly_lost, fp, fn, id_switches, tracks (counts), seconds and frames_per_second of the
-tracker call.
+tracker call. TABLE is the reliability table (`occtrack eval --calibration --json`'s):
+{"ece", "bins", "boxes", "confidence", "right"}, per bin the boxes, their mean confidence and
+the share right (null for an empty bin); combined: the boxes of all sequences pooled.
 
 What `occtrack report` draws is added to each sequence on request, on the boxes the mot17
 protocol scores, lists with one entry a frame (entry t is frame t + 1):

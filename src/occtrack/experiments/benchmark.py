@@ -35,7 +35,7 @@ from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable, read_mot, read_seqinfo
 from occtrack.metrics.gospa import gospa_from_distances
 from occtrack.metrics.protocols import GOSPA_C, GOSPA_P, ScoredFrames, scored_frames
-from occtrack.metrics.reliability import pooled_ece, reliability
+from occtrack.metrics.reliability import pooled, reliability
 from occtrack.metrics.trackeval_mot17 import combined_results, sequence_results, summary
 from occtrack.progress import progress
 from occtrack.tracker import Tracker, TrackerConfig
@@ -309,6 +309,7 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
             "folder": str(seq.folder), "frames": seq.length, "fps": seq.fps,
             "image_size": [seq.width, seq.height], "trackers": {}})
         entry["trackers"][name] = out["scores"]
+        entry.setdefault("calibration", {})[name] = out["calibration"].as_dict()
         if per_frame:
             if "per_frame" not in entry:
                 entry["per_frame"] = {"truth": out["truth"], "trackers": {}}
@@ -320,11 +321,13 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
     frames = sum(seq.length for seq in sequences)
     report["combined"] = {"method": COMBINED_METHOD, "trackers": {}}
     report["mean"] = {"method": MEAN_METHOD, "trackers": {}}
+    report["combined"]["calibration"] = {name: pooled(calibrations[name]).as_dict()
+                                         for name in trackers}
     for name in trackers:
         per_seq = [report["sequences"][seq.name]["trackers"][name] for seq in sequences]
         report["combined"]["trackers"][name] = {
             **summary(combined_results(raw[name])),
-            "ece": pooled_ece(calibrations[name]),
+            "ece": report["combined"]["calibration"][name]["ece"],
             "tracks": sum(values["tracks"] for values in per_seq),
             "seconds": seconds[name], "frames_per_second": frames / max(seconds[name], 1e-9)}
         report["mean"]["trackers"][name] = {

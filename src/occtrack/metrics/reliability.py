@@ -108,12 +108,22 @@ def reliability(frames: ScoredFrames, confidence: np.ndarray, bins: int = BINS) 
     return reliability_table(np.asarray(confidence, dtype=float)[rows], right, bins)
 
 
-def pooled_ece(tables: list[Reliability]) -> float:
-    """The ECE of the boxes of several tables (same bins) taken together: per bin the summed
-    confidences against the summed right boxes."""
+def pooled(tables: list[Reliability]) -> Reliability:
+    """The reliability table of the boxes of several tables (same bins) taken together: per
+    bin the summed boxes, confidences and right boxes."""
     if not tables:
-        return 0.0
+        return reliability_table(np.zeros(0), np.zeros(0, bool))
+    if len({len(t.boxes) for t in tables}) > 1:
+        raise ValueError("tables with different bins cannot be pooled")
+    count = sum(t.boxes for t in tables)
     conf = sum(np.nan_to_num(t.confidence * t.boxes) for t in tables)
     right = sum(np.nan_to_num(t.right * t.boxes) for t in tables)
-    n = max(sum(t.num_boxes for t in tables), 1)
-    return float(np.abs(conf - right).sum() / n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_conf, share = conf / count, right / count
+    ece = float(np.abs(conf - right).sum() / max(int(count.sum()), 1))
+    return Reliability(tables[0].edges, count, mean_conf, share, ece)
+
+
+def pooled_ece(tables: list[Reliability]) -> float:
+    """The ECE of the boxes of several tables taken together (`pooled`)."""
+    return pooled(tables).ece

@@ -161,6 +161,8 @@ class Tracker:
             geometry = BoxOcclusionGeometry(c.occlusion_gain, *c.occlusion_ramp)
             occlusion = box_occlusion(c.occlusion, geometry, c.occluder_min_existence)
         self.occlusion = occlusion
+        size, margin = np.asarray(c.image_size, dtype=float), c.border_margin
+        self._border = np.stack([np.full(2, margin), size - margin], axis=-1)  # BoxMeasurement's
         self.reset()
 
     def reset(self) -> None:
@@ -294,7 +296,8 @@ class Tracker:
             self._reported_serial, self._report_id, self._next_id, c.report_existence,
             c.report_coast_time, c.report_centre_std)
         boxes, existence, velocities, index, classes, occluded = _report_rows(
-            shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE)
+            shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE,
+            self._border)
         n = f.n
         cov = box_covariances(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                               len(r))[shown]
@@ -377,10 +380,13 @@ def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np
 
 
 @njit
-def _report_rows(shown, r, means, took, detections, hidden, classes, occluded_above):
+def _report_rows(shown, r, means, took, detections, hidden, classes, occluded_above, border):
     """The `Tracks` fields after the ids, for the slots `shown`: boxes (the detection's
     when one was taken, else the state's), existence, velocities, detection index, class and
-    whether occlusion (probability above `occluded_above`) explains a miss."""
+    whether occlusion (probability above `occluded_above`) explains a miss. A detection's
+    edge on the image border (`border`: (2, 2) per axis the lowest and highest measured
+    coordinate) is where the image ends, not the person: the state's edge is reported there
+    when it lies farther out (the detector clips, the true box runs on)."""
     K = len(shown)
     boxes, velocities = np.empty((K, 4)), np.empty((K, 2))
     existence, index = np.empty(K), np.empty(K, dtype=np.int64)
@@ -393,7 +399,14 @@ def _report_rows(shown, r, means, took, detections, hidden, classes, occluded_ab
             boxes[a, axis] = means[k, axis, 0] - means[k, axis, 2]
             boxes[a, 2 + axis] = 2.0 * means[k, axis, 2]
         if took[k] >= 0:
-            boxes[a] = detections[took[k]]
+            for axis in range(2):  # (a detection off the border is copied exactly)
+                lo, size = detections[took[k], axis], detections[took[k], 2 + axis]
+                state_lo, state_hi = boxes[a, axis], boxes[a, axis] + boxes[a, 2 + axis]
+                if lo <= border[axis, 0] and state_lo < lo:
+                    lo, size = state_lo, size + (lo - state_lo)
+                if lo + size >= border[axis, 1] and state_hi > lo + size:
+                    size = state_hi - lo
+                boxes[a, axis], boxes[a, 2 + axis] = lo, size
         else:
             occluded[a] = hidden[k] > occluded_above
     return boxes, existence, velocities, index, cls, occluded

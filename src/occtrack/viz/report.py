@@ -38,10 +38,13 @@ COLUMNS = (
     ("fp", "FP", "d", "low", "false positives: reported boxes matched to no true box"),
     ("fn", "FN", "d", "low", "false negatives: true boxes matched to no reported box"),
     ("id_switches", "IDSW", "d", "low", "identity switches"),
+    ("ece", "ECE", ".3f", "low", "expected calibration error of the confidence column: "
+     "the boxes' mean gap between the confidence a box reports and the share of such boxes "
+     "right (matched at IoU >= 0.5), over 10 confidence bins"),
     ("frames_per_second", "frames/s", ".0f", "high",
      "frames per second of the tracker call alone (scoring not counted)"),
 )
-MEAN_KEYS = ("hota", "idf1", "mota", "deta", "assa", "loca")
+MEAN_KEYS = ("hota", "idf1", "mota", "deta", "assa", "loca", "ece")
 PALETTE = ("#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
            "#17becf", "#bcbd22", "#7f7f7f")
 TRUTH_COLOR = "#111111"
@@ -49,6 +52,10 @@ HOW_TO = ("occtrack benchmark DIR --json FILE --keep-boxes (plots and viewer) or
           "(plots)")
 
 _CHART_W, _CHART_H = 960, 230
+_DIAGRAM = 300  # the reliability diagram's side
+_DIAGRAM_TITLE = ("Reliability: per confidence bin (tenths), the share of boxes right (matched "
+                  "one to one at IoU >= 0.5) against the confidence they report; on the "
+                  "diagonal a box said to be 90 % likely is right 90 % of the time")
 _LEFT, _RIGHT, _TOP, _BOTTOM = 52, 14, 12, 34
 
 
@@ -119,6 +126,7 @@ def check_report(data: object, path: str = "<report>") -> None:
                     _need(isinstance(lists, dict) and len(lists.get(key, ())) == frames, path,
                           f"{where}: per_frame of {tracker!r} has no {key!r} list of "
                           f"{frames} frames")
+        _check_calibration(entry.get("calibration"), path, where)
         boxes = entry.get("boxes")
         if boxes is not None:
             _need(isinstance(boxes, dict) and "truth" in boxes, path,
@@ -132,6 +140,21 @@ def check_report(data: object, path: str = "<report>") -> None:
     for part in ("combined", "mean"):
         _need(isinstance(data[part], dict) and isinstance(data[part].get("trackers"), dict),
               path, f"{part!r} has no 'trackers' object")
+    _check_calibration(data["combined"].get("calibration"), path, "'combined'")
+
+
+def _check_calibration(tables: object, path: str, where: str) -> None:
+    """The optional reliability tables, {tracker: {"ece", "boxes", "confidence", "right"}}."""
+    if tables is None:
+        return
+    _need(isinstance(tables, dict), path, f"{where}: 'calibration' is not an object")
+    assert isinstance(tables, dict)
+    for tracker, table in tables.items():
+        _need(isinstance(table, dict) and isinstance(table.get("boxes"), list)
+              and all(isinstance(table.get(k), list) and len(table[k]) == len(table["boxes"])
+                      for k in ("confidence", "right")), path,
+              f"{where}: the calibration of {tracker!r} is not equal lists boxes, "
+              f"confidence, right")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -249,6 +272,56 @@ def _chart(title: str, frames: int, series: list[tuple[str, str, np.ndarray, str
     return f'<figure><figcaption>{_esc(title)}</figcaption>{"".join(parts)}</figure>'
 
 
+def _reliability_diagram(tables: dict | None, colors: dict[str, str], title: str) -> str:
+    """An SVG reliability diagram: per tracker and confidence bin, the share of boxes right
+    against their mean confidence (a dot, its area the bin's share of the boxes); a
+    calibrated tracker lies on the diagonal."""
+    if not tables:
+        return ""
+    size, pad = _DIAGRAM, 40
+    inner = size - 2 * pad + 10
+
+    def x(v: float) -> float:
+        return pad + v * inner
+
+    def y(v: float) -> float:
+        return pad - 20 + inner - v * inner
+
+    parts = [f'<svg class="diagram" viewBox="0 0 {size + 160} {size}" role="img" '
+             f'aria-label="{_esc(title)}">',
+             f'<rect x="{x(0)}" y="{y(1)}" width="{inner}" height="{inner}" class="plot"/>',
+             f'<line x1="{x(0)}" y1="{y(0)}" x2="{x(1)}" y2="{y(1)}" class="diagonal"/>']
+    for tick in (0.0, 0.25, 0.5, 0.75, 1.0):
+        parts.append(f'<text x="{x(tick):.1f}" y="{y(0) + 15:.1f}" class="tick" '
+                     f'text-anchor="middle">{tick:g}</text>'
+                     f'<text x="{x(0) - 5:.1f}" y="{y(tick) + 4:.1f}" class="tick" '
+                     f'text-anchor="end">{tick:g}</text>')
+    parts.append(f'<text x="{x(0.5):.1f}" y="{size - 4}" class="label" text-anchor="middle">'
+                 f'confidence (mean in the bin)</text>'
+                 f'<text x="11" y="{y(0.5):.1f}" class="label" text-anchor="middle" '
+                 f'transform="rotate(-90 11 {y(0.5):.1f})">share right</text>')
+    for row, (name, table) in enumerate(tables.items()):
+        color = colors.get(name, "#888")
+        total = max(sum(int(b or 0) for b in table["boxes"]), 1)
+        points = [(c, r, b) for c, r, b in zip(table["confidence"], table["right"],
+                                                  table["boxes"], strict=True)
+                  if b and c is not None and r is not None]
+        line = " ".join(f"{x(c):.1f},{y(r):.1f}" for c, r, _ in points)
+        parts.append(f'<g data-tracker="{_esc(name)}"><polyline points="{line}" '
+                     f'stroke="{color}"/>')
+        for c, r, b in points:
+            radius = 2.0 + 10.0 * math.sqrt(b / total)
+            parts.append(f'<circle cx="{x(c):.1f}" cy="{y(r):.1f}" r="{radius:.1f}" '
+                         f'fill="{color}"><title>{_esc(name)}: {b} boxes, confidence '
+                         f'{c:.3f}, right {r:.3f}</title></circle>')
+        ece = table.get("ece")
+        label = f"{name} (ECE {ece:.3f})" if isinstance(ece, int | float) else name
+        parts.append(f'<text x="{size - 10}" y="{pad - 10 + 16 * row}" class="tick" '
+                     f'fill="{color}">&#9679; {_esc(label)}</text></g>')
+    parts.append("</svg>")
+    return f'<figure><figcaption>{_esc(title)}</figcaption>{"".join(parts)}</figure>'
+
+
 def _legend(names: list[str], colors: dict[str, str], totals: dict[str, float],
             truth: bool) -> str:
     items = []
@@ -357,6 +430,13 @@ figure { margin: 6px 0 10px; }
 figcaption { color: #444; font-size: 13px; }
 svg.chart { width: 100%; height: auto; background: #fff; cursor: crosshair; }
 svg.chart .plot { fill: #fff; stroke: #bbb; }
+svg.diagram { width: 100%; max-width: 620px; height: auto; background: #fff; }
+svg.diagram .plot { fill: #fff; stroke: #bbb; }
+svg.diagram .diagonal { stroke: #999; stroke-dasharray: 4 3; }
+svg.diagram .tick { font-size: 11px; fill: #555; }
+svg.diagram .label { font-size: 12px; fill: #333; }
+svg.diagram polyline { fill: none; stroke-width: 1.2; opacity: 0.6; }
+svg.diagram circle { opacity: 0.8; }
 svg.chart .grid { stroke: #eee; }
 svg.chart .axis { stroke: #888; }
 svg.chart .tick { font-size: 11px; fill: #555; }
@@ -621,6 +701,8 @@ def build_page(report: dict, source: str = "", title: str | None = None,
         f"<h2>Combined over {count} sequence{'s' if count != 1 else ''}</h2>",
         f'<p class="meta">{_esc(combined.get("method", ""))}.</p>',
         _table(combined["trackers"], colors, table_id="combined-table"),
+        _reliability_diagram(combined.get("calibration"), colors, _DIAGRAM_TITLE
+                             + f" (the boxes of all {count} pooled)"),
         f"<h2>Mean over {count} sequence{'s' if count != 1 else ''}</h2>",
         f'<p class="meta">{_esc(mean.get("method", ""))}.</p>',
         _table(mean["trackers"], colors, mean_columns, table_id="mean-table"),
@@ -630,6 +712,7 @@ def build_page(report: dict, source: str = "", title: str | None = None,
         body += [f'<section id="{_anchor(i)}">',
                  f"<h2>{_esc(_sequence_title(name, entry))}</h2>",
                  _table(entry["trackers"], colors),
+                 _reliability_diagram(entry.get("calibration"), colors, _DIAGRAM_TITLE),
                  _plots(entry, colors, i),
                  _viewer(entry, i, show),
                  "</section>"]
