@@ -194,3 +194,25 @@ def test_eval_calibration_errors(tmp_path, capsys, argv, message):
                  *argv]) != 0
     err = capsys.readouterr().err
     assert message in err
+
+
+def test_confidence_centre_the_detection_or_the_posterior():
+    """A standing person whose detection jumps sideways by a third of its width: about the
+    detection (the default) the box is as sure as before, about the posterior mean (which the
+    jump only partly moves) it is less sure; a coasting box is the same under both. An
+    unknown form is refused by name."""
+    person = np.array([[800.0, 400.0, 80.0, 200.0]])
+    said = {}
+    for centre in ("detection", "posterior"):
+        tracker = Tracker(TrackerConfig(camera_motion="none", confidence_centre=centre))
+        for _ in range(15):
+            steady = tracker.step(person)
+        jumped = tracker.step(person + [[80.0 / 3, 0, 0, 0]])
+        coasting = tracker.step(np.zeros((0, 4)))
+        assert jumped.detection_index.tolist() == [0] and coasting.detection_index.tolist() == [-1]
+        said[centre] = steady.confidence[0], jumped.confidence[0], coasting.confidence[0]
+    assert said["detection"][1] > said["posterior"][1] + 0.05
+    assert said["detection"][1] > said["detection"][0] - 0.02
+    assert said["detection"][2] == said["posterior"][2]
+    with pytest.raises(ValueError, match="confidence_centre must be one of detection, posterior"):
+        TrackerConfig(confidence_centre="mean")

@@ -34,6 +34,7 @@ from occtrack.errors import OcctrackError, opening
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
 CAMERA_MOTION_NAMES = ("detections", "none")
+CONFIDENCE_CENTRES = ("detection", "posterior")
 # integer settings whose size sets memory or run time: far beyond any scene, short of a hang
 INTEGER_RANGES = {"frame_step": (1, 10_000), "capacity": (0, 10_000_000),
                   "max_labels": (0, 1_000_000), "max_components_per_object": (0, 100_000),
@@ -68,6 +69,10 @@ class TrackerConfig:
     capacity: int = 0  # Gaussian components, all objects and the Poisson part (paper: 2048)
     max_labels: int = 0  # labelled Bernoullis; past the limit the weakest are recycled (paper: 72)
     report_existence: float = 0.5  # report an object when r exceeds this
+    # a detected box's confidence (occtrack.tracker.confidence) takes the posterior's spread
+    # about the detection itself, or about the posterior mean ("posterior": the exact form,
+    # calibrated where the noise settings match the detector; wider settings make it too low)
+    confidence_centre: str = "detection"
 
     # lengths below are in units of the box's own height h (h of the component's mean box)
     edge_noise: float = 0.069  # std of each measured box edge, h (12 px at h = 175 px)
@@ -160,6 +165,9 @@ class TrackerConfig:
         if self.camera_motion not in CAMERA_MOTION_NAMES:
             raise ValueError(f"camera_motion must be one of {', '.join(CAMERA_MOTION_NAMES)}, "
                              f"not {self.camera_motion!r}")
+        if self.confidence_centre not in CONFIDENCE_CENTRES:
+            raise ValueError(f"confidence_centre must be one of {', '.join(CONFIDENCE_CENTRES)}"
+                             f", not {self.confidence_centre!r}")
         w, h = self.image_size
         positive = {"image width": w, "image height": h, "fps": self.fps,
                     "edge_noise": self.edge_noise, "report_centre_std": self.report_centre_std,
@@ -312,6 +320,7 @@ from occtrack.config.highway import (  # noqa: E402
     load_highway,
 )
 
-__all__ = ["CAMERA_MOTION_NAMES", "INTEGER_RANGES", "OCCLUSION_NAMES", "SENSOR_MODES",
+__all__ = ["CAMERA_MOTION_NAMES", "CONFIDENCE_CENTRES", "INTEGER_RANGES", "OCCLUSION_NAMES",
+           "SENSOR_MODES",
            "HighwayTrackerConfig", "RoadConfig", "SimulationConfig", "TrackerConfig", "build",
            "check_ranges", "highway_from_dict", "load_highway", "load_toml"]

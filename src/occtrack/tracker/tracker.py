@@ -302,9 +302,10 @@ class Tracker:
         cov = box_covariances(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                               len(r))[shown]
         centre, half = means[shown][:, :, 0], means[shown][:, :, 2]
-        detected = index >= 0  # the detection's box is the estimate, the posterior its spread
-        centre[detected] = boxes[detected, :2] + boxes[detected, 2:] / 2.0
-        half[detected] = boxes[detected, 2:] / 2.0
+        if c.confidence_centre == "detection":  # the detection's box, the posterior's spread
+            detected = index >= 0
+            centre[detected] = boxes[detected, :2] + boxes[detected, 2:] / 2.0
+            half[detected] = boxes[detected, 2:] / 2.0
         confidence = existence * overlap_probability(centre, half, cov, boxes)
         return Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
                       occluded, confidence)
