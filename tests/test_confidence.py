@@ -8,7 +8,7 @@ import pytest
 
 from occtrack.metrics.protocols import ScoredFrames
 from occtrack.metrics.reliability import reliability_table, right_boxes
-from occtrack.tracker import Tracker, TrackerConfig
+from occtrack.tracker import Tracker, TrackerConfig, confidence
 from occtrack.tracker.confidence import DRAWS, box_covariances, overlap_probability
 
 
@@ -86,6 +86,33 @@ def test_overlap_probability_against_independent_monte_carlo():
     assert 0.2 < truth < 0.8  # a case where the spread matters
     se = np.sqrt(truth * (1 - truth) * (1 / DRAWS + 1 / n))
     assert abs(p - truth) < 4 * se
+
+
+def test_the_blocks_bounds_change_no_count():
+    """The bounds that skip whole blocks of draws (`_decided`) give exactly the count of
+    drawing every one of the fixed draws, for boxes sure, unsure and hopeless, with and without
+    correlation, tiny and wide spreads, and boxes the reported one holds or misses."""
+    rng = np.random.default_rng(11)
+    n = 600
+    centre = rng.uniform(80, 120, (n, 2))
+    half = rng.uniform(10, 60, (n, 2))
+    size = 2 * half * rng.uniform(0.3, 3.0, (n, 2))  # (reported smaller and larger)
+    reported = np.c_[centre - size / 2 + rng.normal(0, 8, (n, 2)), size]
+    scale = 10.0 ** rng.uniform(-3, 1.5, n)  # px: from certain to hopeless
+    root = rng.normal(0, 1, (n, 2, 2, 2)) * scale[:, None, None, None]
+    cov = root @ root.transpose(0, 1, 3, 2)
+    got = overlap_probability(centre, half, cov, reported)
+    z = confidence._Z  # (DRAWS, axis, (c, s)), every draw
+    L = np.linalg.cholesky(cov + 1e-300 * np.eye(2))
+    c = centre[:, None, :] + L[None, :, :, 0, 0].transpose(1, 0, 2) * z[None, :, :, 0]
+    s = np.maximum(half[:, None, :] + L[:, :, 1, 0][:, None, :] * z[None, :, :, 0]
+                   + L[:, :, 1, 1][:, None, :] * z[None, :, :, 1], 0.0)
+    lo, hi = reported[:, None, :2], reported[:, None, :2] + reported[:, None, 2:]
+    inter = np.prod(np.maximum(np.minimum(c + s, hi) - np.maximum(c - s, lo), 0.0), axis=-1)
+    union = np.prod(2.0 * s, axis=-1) + np.prod(reported[:, 2:], axis=-1)[:, None] - inter
+    expected = ((union > 0) & (inter >= 0.5 * union)).mean(axis=1)
+    assert np.array_equal(got, expected)
+    assert (got == 1).sum() > 30 and (got == 0).sum() > 30 and ((got > 0) & (got < 1)).sum() > 30
 
 
 def test_box_covariances_of_a_mixture():

@@ -81,7 +81,7 @@ def estimate_motion(previous: np.ndarray, current: np.ndarray,
     if pairs is None:
         return None
     shift = _median_rows(pairs)
-    sigma = 1.4826 * np.median(np.abs(pairs - shift), axis=0)
+    sigma = 1.4826 * _median_rows(np.abs(pairs - shift))
     return shift, math.sqrt(math.pi / 2.0) * sigma / math.sqrt(len(pairs))
 
 

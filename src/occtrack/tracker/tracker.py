@@ -50,7 +50,7 @@ from occtrack.tracker.boxes import (
     to_ltwh,
 )
 from occtrack.tracker.camera import estimate_motion
-from occtrack.tracker.confidence import box_covariances, overlap_probability
+from occtrack.tracker.confidence import report_confidence
 
 CAMERA_MEMORY = 1.0
 """s: the time constant of the camera's remembered speed (`Tracker.step`)."""
@@ -299,14 +299,9 @@ class Tracker:
             shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE,
             self._border)
         n = f.n
-        cov = box_covariances(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
-                              len(r))[shown]
-        centre, half = means[shown][:, :, 0], means[shown][:, :, 2]
-        if c.confidence_centre == "detection":  # the detection's box, the posterior's spread
-            detected = index >= 0
-            centre[detected] = boxes[detected, :2] + boxes[detected, 2:] / 2.0
-            half[detected] = boxes[detected, 2:] / 2.0
-        confidence = existence * overlap_probability(centre, half, cov, boxes)
+        confidence = report_confidence(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
+                                       shown, boxes, index >= 0,
+                                       c.confidence_centre == "detection")
         return Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
                       occluded, confidence)
 
