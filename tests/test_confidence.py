@@ -243,3 +243,26 @@ def test_confidence_centre_the_detection_or_the_posterior():
     assert said["detection"][2] == said["posterior"][2]
     with pytest.raises(ValueError, match="confidence_centre must be one of detection, posterior"):
         TrackerConfig(confidence_centre="mean")
+
+
+def test_report_min_confidence_keeps_the_boxes_at_least_that_likely():
+    """Every box reported under a threshold is one reported without it, with its id, box and
+    confidence, and at least that likely; the ones left out are exactly those below it. A
+    threshold outside [0, 1] is refused by name."""
+    rng = np.random.default_rng(5)
+    walkers = np.array([[300.0, 400.0, 60.0, 150.0], [900.0, 380.0, 64.0, 160.0],
+                        [1500.0, 420.0, 56.0, 140.0]])
+    trackers = [Tracker(TrackerConfig(report_min_confidence=p)) for p in (0.0, 0.8)]
+    left_out = 0
+    for t in range(60):
+        seen = walkers[rng.random(3) < (0.3 if 20 <= t < 40 else 0.95)] + [4.0 * t, 0, 0, 0]
+        everyone, sure = (tracker.step(seen) for tracker in trackers)
+        kept = np.isin(everyone.ids, sure.ids)
+        assert np.array_equal(everyone.ids[kept], sure.ids)
+        assert np.array_equal(everyone.boxes[kept], sure.boxes)
+        assert np.array_equal(everyone.confidence[kept], sure.confidence)
+        assert np.all(everyone.confidence[kept] >= 0.8) and np.all(everyone.confidence[~kept] < 0.8)
+        left_out += int((~kept).sum())
+    assert left_out > 0
+    with pytest.raises(ValueError, match="report_min_confidence must be a probability"):
+        TrackerConfig(report_min_confidence=1.5)

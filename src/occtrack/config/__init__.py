@@ -118,6 +118,9 @@ class TrackerConfig:
     # centre is known to within report_centre_std box heights
     report_coast_time: float = 0.67
     report_centre_std: float = 0.1
+    # and of those only the boxes whose confidence (the probability that the box is a real
+    # object at that place, occtrack.tracker.confidence) is at least this; 0: all of them
+    report_min_confidence: float = 0.0
 
     occlusion_gain: float = 2.0  # box geometry: clip(gain * overlap / area, 0, 1)
     occlusion_ramp: tuple[float, float] = (-0.1, 0.25)  # bottom-gap ramp, 0 at first, 1 at second
@@ -192,6 +195,7 @@ class TrackerConfig:
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be a number >= 0, not {value}")
         probabilities = {"report_existence": self.report_existence,
+                         "report_min_confidence": self.report_min_confidence,
                          "exit_survival": self.exit_survival,
                          "detectability": self.stationary_detectability,
                          "detectability_ratio": self.detectability_ratio,

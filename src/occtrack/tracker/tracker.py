@@ -110,6 +110,12 @@ class Tracks:
                       np.full(len(self), -1, dtype=np.int64), self.classes, self.occluded,
                       self.confidence, self.box_format)
 
+    def select(self, keep: np.ndarray) -> Tracks:
+        """The tracks where `keep` (n,) bool is True, in the same order."""
+        return Tracks(self.ids[keep], self.boxes[keep], self.existence[keep],
+                      self.velocities[keep], self.detection_index[keep], self.classes[keep],
+                      self.occluded[keep], self.confidence[keep], self.box_format)
+
     def in_format(self, box_format: BoxFormat) -> Tracks:
         """The same tracks with boxes in another format."""
         check_format(box_format)
@@ -282,8 +288,8 @@ class Tracker:
         """The objects reported now, by id: existence above `report_existence`, and either
         detected at this step or unseen for at most `report_coast_time` with the centre known
         to within `report_centre_std` box heights (a coasting estimate drifts, and a box
-        shown where nobody is costs more than one left out). Boxes are left, top, width,
-        height."""
+        shown where nobody is costs more than one left out), and of those the ones whose
+        confidence is at least `report_min_confidence`. Boxes are left, top, width, height."""
         f, c = self.filter, self.config
         grow = len(f.slot_used) - len(self._report_id)
         if grow > 0:
@@ -302,8 +308,11 @@ class Tracker:
         confidence = report_confidence(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                                        shown, boxes, index >= 0,
                                        c.confidence_centre == "detection")
-        return Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
-                      occluded, confidence)
+        tracks = Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
+                        occluded, confidence)
+        if c.report_min_confidence > 0:
+            tracks = tracks.select(confidence >= c.report_min_confidence)
+        return tracks
 
     def run(self, detections: MotTable | Iterable[npt.ArrayLike], num_frames: int | None = None,
             quiet: bool = True, desc: str = "tracking") -> TrackResult:
