@@ -9,7 +9,7 @@ import pytest
 
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable, read_mot
-from occtrack.peers import PEERS, track_peer
+from occtrack.peers import BOXMOT_PEERS, PEERS, track_peer
 
 PEOPLE, FRAMES, GAP = 4, 40, 25  # people, frames, frames 1..GAP-1 only for the last person
 
@@ -84,3 +84,48 @@ def test_missing_library_says_how_to_install(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "trackers", None)
     with pytest.raises(OcctrackError, match=r'pip install "occtrack\[peers\]"'):
         track_peer("bytetrack", det, FRAMES, 30.0)
+
+
+@pytest.fixture(scope="module")
+def boxmot_scene(tmp_path_factory):
+    pytest.importorskip("boxmot", reason='boxmot peers need pip install "occtrack[boxmot]"')
+    return _scene(tmp_path_factory.mktemp("boxmot"))
+
+
+@pytest.mark.parametrize("name", list(BOXMOT_PEERS))
+def test_boxmot_peer_rows_are_valid_and_follow_each_person(boxmot_scene, name):
+    """boxmot returns its own estimate of each tracked box: every row lies on one person's
+    detection of that frame (IoU >= 0.5) and, with people this far apart, each person keeps
+    one id."""
+    det, person = boxmot_scene
+    out = track_peer(name, det, FRAMES + 5, 30.0, (1280, 720))
+    assert isinstance(out, MotTable) and len(out) > 0
+    assert out.frame.min() >= 1 and out.frame.max() <= FRAMES
+    assert len(np.unique(out.frame * 1000 + out.id)) == len(out), "an id twice in one frame"
+    owner = np.empty(len(out), dtype=int)
+    for k in range(len(out)):
+        at = np.flatnonzero(det.frame == out.frame[k])
+        lo = np.maximum(det.box[at, :2], out.box[k, :2])
+        hi = np.minimum(det.box[at, :2] + det.box[at, 2:], out.box[k, :2] + out.box[k, 2:])
+        inter = np.prod(np.clip(hi - lo, 0, None), axis=1)
+        iou = inter / (np.prod(det.box[at, 2:], axis=1) + np.prod(out.box[k, 2:]) - inter)
+        assert iou.max() >= 0.5
+        owner[k] = person[at[np.argmax(iou)]]
+    pairs = set(zip(owner.tolist(), out.id.tolist(), strict=True))
+    assert len(pairs) == PEOPLE == len({p for p, _ in pairs}) == len({i for _, i in pairs})
+    empty = det.select(np.zeros(len(det), dtype=bool))
+    assert len(track_peer(name, empty, 10, 14.0, (1280, 720))) == 0
+
+
+def test_missing_boxmot_says_how_to_install(tmp_path, monkeypatch):
+    from occtrack.experiments.benchmark import parse_trackers
+    from occtrack.peers import boxmot
+
+    det, _ = _scene(tmp_path)
+    monkeypatch.setitem(sys.modules, "boxmot", None)
+    monkeypatch.setitem(sys.modules, "boxmot.trackers.specs", None)
+    with pytest.raises(OcctrackError, match=r'pip install "occtrack\[boxmot\]"'):
+        track_peer("occluboost", det, FRAMES, 30.0)
+    monkeypatch.setattr(boxmot, "available", lambda: False)
+    with pytest.raises(OcctrackError, match=r"boxmot peer trackers need the `boxmot` package"):
+        parse_trackers("object-wise,occluboost")

@@ -73,7 +73,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--trackers", metavar="LIST",
                         help="comma list of trackers (default: none, measurement-wise, "
                              "object-wise, and sort, bytetrack, ocsort, botsort, cbiou when "
-                             "the peers extra is installed)")
+                             "the peers extra is installed); boxmot's, with the boxmot "
+                             "extra: occluboost, boxmot-botsort, boosttrack, "
+                             "boxmot-bytetrack, boxmot-ocsort, sfsort, hybridsort, "
+                             "deepocsort")
     parser.add_argument("--json", metavar="FILE",
                         help="write the scores as JSON to FILE (- prints them instead of the "
                              "tables)")

@@ -72,14 +72,14 @@ class Sequence:
 
 
 def all_trackers() -> tuple[str, ...]:
-    return MODELS + tuple(peers.PEERS)
+    return MODELS + tuple(peers.ALL_PEERS)
 
 
 def default_trackers() -> tuple[list[str], str | None]:
     """Every occlusion model, and every peer when `trackers` is installed; the note to print
     when the peers are left out."""
     if peers.available():
-        return list(all_trackers()), None
+        return list(MODELS + tuple(peers.PEERS)), None
     return list(MODELS), ("the peers (" + ", ".join(peers.PEERS) + ") are left out: "
                           + peers.INSTALL_HINT)
 
@@ -94,9 +94,9 @@ def parse_trackers(text: str) -> list[str]:
     if unknown:
         raise OcctrackError(f"unknown tracker {unknown[0]!r}; choose from "
                             + ", ".join(all_trackers()))
-    if any(name in peers.PEERS for name in names) and not peers.available():
-        raise OcctrackError("the peer trackers need the `trackers` package; "
-                            + peers.INSTALL_HINT)
+    what = peers.missing(names)
+    if what:
+        raise OcctrackError(what)
     return list(dict.fromkeys(names))
 
 
@@ -169,7 +169,7 @@ def track_with_states(name: str, seq: Sequence) -> tuple[MotTable, np.ndarray | 
             states[out.occluded] = OCCLUDED
         return MotTable(out.frame, out.id, out.box, out.confidence, np.full(n, -1),
                         np.full(n, -1.0), "<occtrack>"), states
-    return peers.track_peer(name, seq.det, seq.length, seq.fps), None
+    return peers.track_peer(name, seq.det, seq.length, seq.fps, (seq.width, seq.height)), None
 
 
 def per_frame_counts(frames: ScoredFrames) -> dict:
@@ -225,8 +225,7 @@ def run_job(job: Job) -> dict:
     """Track and score one sequence with one tracker (a task: it reads the folder itself, so
     only the job's text travels to a worker); the parts of the report it makes."""
     seq = cached_sequence(job.folder)
-    if job.tracker in peers.PEERS:
-        peers.load()
+    peers.load_for(job.tracker)
     start = time.perf_counter()
     result, states = track_with_states(job.tracker, seq)
     spent = time.perf_counter() - start
@@ -274,8 +273,8 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
     names = [seq.name for seq in sequences]
     if len(set(names)) < len(names):
         raise OcctrackError("two sequence folders share a name in seqinfo.ini", str(root))
-    if any(name in peers.PEERS for name in trackers):
-        peers.load()
+    for name in dict.fromkeys(n for n in trackers if n in peers.ALL_PEERS):
+        peers.load_for(name)
     jobs = [Job(str(seq.folder.resolve()), name, per_frame, keep_boxes) for seq in sequences
             for name in trackers]
     done: dict[Job, dict] = {}

@@ -117,10 +117,3 @@ PEERS: dict[str, Callable[[MotTable, int, float], MotTable]] = {
     "sort": sort, "bytetrack": bytetrack, "ocsort": ocsort, "botsort": botsort, "cbiou": cbiou,
 }
 """Every peer by the name `occtrack benchmark --trackers` takes."""
-
-
-def track_peer(name: str, det: MotTable, num_frames: int, fps: float) -> MotTable:
-    """Run the peer called `name` (a key of PEERS)."""
-    if name not in PEERS:
-        raise OcctrackError(f"unknown peer tracker {name!r}; choose from {', '.join(PEERS)}")
-    return PEERS[name](det, num_frames, fps)
