@@ -287,7 +287,7 @@ def _reliability_diagram(tables: dict | None, colors: dict[str, str], title: str
     def y(v: float) -> float:
         return pad - 20 + inner - v * inner
 
-    parts = [f'<svg class="diagram" viewBox="0 0 {size + 160} {size}" role="img" '
+    parts = [f'<svg class="diagram" viewBox="0 0 {size + 230} {size}" role="img" '
              f'aria-label="{_esc(title)}">',
              f'<rect x="{x(0)}" y="{y(1)}" width="{inner}" height="{inner}" class="plot"/>',
              f'<line x1="{x(0)}" y1="{y(0)}" x2="{x(1)}" y2="{y(1)}" class="diagonal"/>']
@@ -316,8 +316,8 @@ def _reliability_diagram(tables: dict | None, colors: dict[str, str], title: str
                          f'{c:.3f}, right {r:.3f}</title></circle>')
         ece = table.get("ece")
         label = f"{name} (ECE {ece:.3f})" if isinstance(ece, int | float) else name
-        parts.append(f'<text x="{size - 10}" y="{pad - 10 + 16 * row}" class="tick" '
-                     f'fill="{color}">&#9679; {_esc(label)}</text></g>')
+        parts.append(f'<text x="{size - 10}" y="{pad - 10 + 16 * row}" class="key" '
+                     f'style="fill:{color}">&#9679; {_esc(label)}</text></g>')
     parts.append("</svg>")
     return f'<figure><figcaption>{_esc(title)}</figcaption>{"".join(parts)}</figure>'
 
@@ -430,11 +430,12 @@ figure { margin: 6px 0 10px; }
 figcaption { color: #444; font-size: 13px; }
 svg.chart { width: 100%; height: auto; background: #fff; cursor: crosshair; }
 svg.chart .plot { fill: #fff; stroke: #bbb; }
-svg.diagram { width: 100%; max-width: 620px; height: auto; background: #fff; }
+svg.diagram { width: 100%; max-width: 700px; height: auto; background: #fff; }
 svg.diagram .plot { fill: #fff; stroke: #bbb; }
 svg.diagram .diagonal { stroke: #999; stroke-dasharray: 4 3; }
 svg.diagram .tick { font-size: 11px; fill: #555; }
 svg.diagram .label { font-size: 12px; fill: #333; }
+svg.diagram .key { font-size: 12px; }
 svg.diagram polyline { fill: none; stroke-width: 1.2; opacity: 0.6; }
 svg.diagram circle { opacity: 0.8; }
 svg.chart .grid { stroke: #eee; }
