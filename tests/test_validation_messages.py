@@ -29,12 +29,15 @@ NON_NEGATIVE = ["position_noise", "velocity_noise", "size_noise", "death_rate",
                 "inward_speed", "clutter_score_power", "report_coast_time"]
 PROBABILITIES = ["report_existence", "exit_survival", "detectability", "detectability_ratio",
                  "occludability", "occludability_ratio", "birth_detectability",
-                 "birth_occludability", "occluder_min_existence", "label_min_existence"]
+                 "birth_occludability", "occluder_min_existence", "label_min_existence",
+                 "report_min_confidence"]
 
 CONFIG_CASES = [
     (dict(occlusion="grid"),
      "occlusion must be one of none, object-wise, measurement-wise, not 'grid'"),
     (dict(camera_motion="orb"), "camera_motion must be one of detections, none, not 'orb'"),
+    (dict(confidence_centre="mean"),
+     "confidence_centre must be one of detection, posterior, not 'mean'"),
     (dict(frame_step=0), "frame_step must be between 1 and 10000, not 0"),
     (dict(capacity=-1), "capacity must be between 0 and 10000000, not -1"),
     (dict(max_labels=-1), "max_labels must be between 0 and 1000000, not -1"),

@@ -66,7 +66,8 @@ class Tracks:
     Attributes:
         ids: (n,) int track ids, unique, never reused.
         boxes: (n, 4) float boxes in `box_format`: the detection's own box for an object that
-            took one this frame, the filter's estimate for one that did not.
+            took one this frame (an edge of it on the image border replaced by the filter's
+            where the person runs on past it), the filter's estimate for one that did not.
         existence: (n,) probability that each object exists.
         confidence: (n,) probability that each box is a real object at that place: the
             object exists and its true box overlaps the reported one at IoU >= 0.5
