@@ -189,6 +189,12 @@ def test_bad_input_and_outputs_are_named(run, tmp_path, capsys):
     assert "no 'trackers' key" in capsys.readouterr().err
     assert main(["report", str(tmp_path / "absent.json"), "-o", str(out)]) == 1
     assert "absent.json" in capsys.readouterr().err
+    broken = json.loads(results.read_text())
+    broken["sequences"]["SYN-B"]["calibration"]["none"]["right"].pop()
+    bad.write_text(json.dumps(broken))
+    assert main(["report", str(bad), "-o", str(out)]) == 1
+    assert ("sequence 'SYN-B': the calibration of 'none' is not equal lists boxes, "
+            "confidence, right") in capsys.readouterr().err
     assert main(["report", str(results), "-o", str(results), "--force"]) == 1
     assert "is also an input" in capsys.readouterr().err
     out.write_text("keep me")
