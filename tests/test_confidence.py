@@ -266,3 +266,37 @@ def test_report_min_confidence_keeps_the_boxes_at_least_that_likely():
     assert left_out > 0
     with pytest.raises(ValueError, match="report_min_confidence must be a probability"):
         TrackerConfig(report_min_confidence=1.5)
+
+
+def test_in_the_models_own_world_the_exact_form_keeps_its_word():
+    """A world drawn from the tracker's own motion and box model (occtrack.scenarios.
+    model_world, 3 seeds, about 3,000 detected boxes): the exact form's overlap probability
+    (confidence over existence, `confidence_centre = "posterior"`) of a detected box against
+    the person behind its detection is within .02 of the share right (about four standard
+    errors; the gap left, near .01 too unsure, is the filter's approximations: mixture
+    reduction, gating, the coasting velocity's decay); the default form, which leaves out how
+    far the detection lies from the posterior, is too sure by more than .05 here
+    (benchmarks/calibration_model_world.py prints both over 6 seeds)."""
+    from occtrack.scenarios.model_world import iou_with, model_world
+
+    said = {}
+    for centre in ("posterior", "detection"):
+        overlap, right = [], []
+        for seed in range(3):
+            config = TrackerConfig(occlusion="none", image_size=(3840.0, 2160.0), fps=30.0,
+                                   camera_motion="none", confidence_centre=centre)
+            tracker = Tracker(config)
+            for frame in model_world(config, frames=150, seed=seed):
+                tracks = tracker.step(frame.detections)
+                for i in np.flatnonzero(tracks.detection_index >= 0):
+                    who = frame.person[tracks.detection_index[i]]
+                    if who >= 0:
+                        overlap.append(tracks.confidence[i] / tracks.existence[i])
+                        right.append(iou_with(tracks.boxes[i], frame.truth[who]) >= 0.5)
+        p, ok = np.array(overlap), np.array(right)
+        error = np.sqrt((p * (1 - p)).sum()) / len(p)
+        said[centre] = p.mean() - ok.mean(), error, len(p)
+    gap, error, n = said["posterior"]
+    assert n > 2500 and error < 0.006
+    assert abs(gap) < 0.02
+    assert said["detection"][0] > 0.05
