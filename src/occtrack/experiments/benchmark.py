@@ -273,7 +273,7 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
     names = [seq.name for seq in sequences]
     if len(set(names)) < len(names):
         raise OcctrackError("two sequence folders share a name in seqinfo.ini", str(root))
-    for name in dict.fromkeys(n for n in trackers if n in peers.ALL_PEERS):
+    for name in trackers:
         peers.load_for(name)
     jobs = [Job(str(seq.folder.resolve()), name, per_frame, keep_boxes) for seq in sequences
             for name in trackers]
@@ -320,13 +320,14 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
     frames = sum(seq.length for seq in sequences)
     report["combined"] = {"method": COMBINED_METHOD, "trackers": {}}
     report["mean"] = {"method": MEAN_METHOD, "trackers": {}}
-    report["combined"]["calibration"] = {name: pooled(calibrations[name]).as_dict()
-                                         for name in trackers}
+    report["combined"]["calibration"] = {}
     for name in trackers:
         per_seq = [report["sequences"][seq.name]["trackers"][name] for seq in sequences]
+        calibration = pooled(calibrations[name]).as_dict()
+        report["combined"]["calibration"][name] = calibration
         report["combined"]["trackers"][name] = {
             **summary(combined_results(raw[name])),
-            "ece": report["combined"]["calibration"][name]["ece"],
+            "ece": calibration["ece"],
             "tracks": sum(values["tracks"] for values in per_seq),
             "seconds": seconds[name], "frames_per_second": frames / max(seconds[name], 1e-9)}
         report["mean"]["trackers"][name] = {

@@ -122,8 +122,3 @@ def pooled(tables: list[Reliability]) -> Reliability:
         mean_conf, share = conf / count, right / count
     ece = float(np.abs(conf - right).sum() / max(int(count.sum()), 1))
     return Reliability(tables[0].edges, count, mean_conf, share, ece)
-
-
-def pooled_ece(tables: list[Reliability]) -> float:
-    """The ECE of the boxes of several tables taken together (`pooled`)."""
-    return pooled(tables).ece

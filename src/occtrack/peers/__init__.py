@@ -34,7 +34,8 @@ ALL_PEERS = (*PEERS, *BOXMOT_PEERS)
 
 
 def load_for(name: str) -> None:
-    """Import the library that runs peer `name`, or raise naming the extra that brings it."""
+    """Import the library that runs peer `name` (nothing for occtrack's own models), or raise
+    naming the extra that brings it."""
     if name in BOXMOT_PEERS:
         boxmot.load()
     elif name in PEERS:

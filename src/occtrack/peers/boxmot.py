@@ -24,6 +24,7 @@ import numpy as np
 
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
+from occtrack.peers.rows import check_length, check_run, empty_table, result_table
 
 INSTALL_HINT = 'install it with: pip install "occtrack[boxmot]" (about 3 GB: torch)'
 
@@ -70,13 +71,8 @@ def _create(name: str, fps: float):
 def _run(name: str, det: MotTable, num_frames: int, fps: float,
          image_size: tuple[int, int]) -> MotTable:
     """Feed frames 1..num_frames to boxmot's tracker `name`; every row it returns."""
-    if num_frames < 0:
-        raise OcctrackError(f"number of frames must be 0 or more, got {num_frames}")
-    if not fps > 0:
-        raise OcctrackError(f"frame rate must be positive, got {fps}")
-    if len(det) and det.num_frames > num_frames:
-        raise OcctrackError(f"detections reach frame {det.num_frames}, beyond the "
-                            f"{num_frames} frames of the sequence", det.path or None)
+    check_run(num_frames, fps)
+    check_length(det, num_frames)
     tracker = _create(name, fps)
     width, height = (max(int(round(v)), 1) for v in image_size)
     blank = np.zeros((height, width, 3), np.uint8)
@@ -93,18 +89,9 @@ def _run(name: str, det: MotTable, num_frames: int, fps: float,
             boxes.append(np.concatenate([out[:, :2], out[:, 2:4] - out[:, :2]], axis=1))
             scores.append(out[:, 5])
     if not frames:
-        return _table(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)),
-                      np.zeros(0))
-    return _table(np.concatenate(frames), np.concatenate(ids), np.concatenate(boxes),
-                  np.concatenate(scores))
-
-
-def _table(frame, ids, box, score) -> MotTable:
-    order = np.lexsort((ids, frame))
-    n = len(order)
-    return MotTable(frame=frame[order].astype(np.int64), id=ids[order].astype(np.int64),
-                    box=box[order].astype(float), score=score[order].astype(float),
-                    cls=np.full(n, -1, dtype=np.int64), visibility=np.full(n, -1.0))
+        return empty_table()
+    return result_table(np.concatenate(frames), np.concatenate(ids), np.concatenate(boxes),
+                        np.concatenate(scores))
 
 
 def _peer(name: str, doc: str) -> Callable[..., MotTable]:

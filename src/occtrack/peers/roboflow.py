@@ -9,6 +9,7 @@ import numpy as np
 
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
+from occtrack.peers.rows import check_length, check_run, empty_table, result_table
 
 INSTALL_HINT = 'install them with: pip install "occtrack[peers]"'
 
@@ -34,9 +35,7 @@ def load():
 def _run(tracker, det: MotTable, num_frames: int) -> MotTable:
     """Feed frames 1..num_frames to a `trackers` tracker; keep the confirmed tracks' rows."""
     sv, _ = load()
-    if len(det) and det.num_frames > num_frames:
-        raise OcctrackError(f"detections reach frame {det.num_frames}, beyond the "
-                            f"{num_frames} frames of the sequence", det.path or None)
+    check_length(det, num_frames)
     corners = np.concatenate([det.box[:, :2], det.box[:, :2] + det.box[:, 2:]], axis=1)
     score = det.score.astype(float)
     out_frame, out_id, out_xyxy, out_score = [], [], [], []
@@ -55,60 +54,44 @@ def _run(tracker, det: MotTable, num_frames: int) -> MotTable:
         out_score.append(tracked.confidence[confirmed] if tracked.confidence is not None
                          else np.ones(int(confirmed.sum())))
     if not out_frame:
-        return _table(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)),
-                      np.zeros(0))
+        return empty_table()
     xyxy = np.concatenate(out_xyxy).reshape(-1, 4)
     box = np.concatenate([xyxy[:, :2], xyxy[:, 2:] - xyxy[:, :2]], axis=1)
-    return _table(np.concatenate(out_frame), np.concatenate(out_id), box,
-                  np.concatenate(out_score))
-
-
-def _table(frame: np.ndarray, ids: np.ndarray, box: np.ndarray, score: np.ndarray) -> MotTable:
-    order = np.lexsort((ids, frame))
-    n = len(order)
-    return MotTable(frame=frame[order].astype(np.int64), id=ids[order].astype(np.int64),
-                    box=box[order].astype(float), score=score[order].astype(float),
-                    cls=np.full(n, -1, dtype=np.int64), visibility=np.full(n, -1.0))
-
-
-def _check(num_frames: int, fps: float) -> None:
-    if num_frames < 0:
-        raise OcctrackError(f"number of frames must be 0 or more, got {num_frames}")
-    if not fps > 0:
-        raise OcctrackError(f"frame rate must be positive, got {fps}")
+    return result_table(np.concatenate(out_frame), np.concatenate(out_id), box,
+                        np.concatenate(out_score))
 
 
 def sort(det: MotTable, num_frames: int, fps: float) -> MotTable:
     """SORT (Bewley et al. 2016): Kalman filter and Hungarian IoU matching."""
-    _check(num_frames, fps)
+    check_run(num_frames, fps)
     _, trackers = load()
     return _run(trackers.SORTTracker(frame_rate=fps), det, num_frames)
 
 
 def bytetrack(det: MotTable, num_frames: int, fps: float) -> MotTable:
     """ByteTrack (Zhang et al. 2022): a second matching round for low-score detections."""
-    _check(num_frames, fps)
+    check_run(num_frames, fps)
     _, trackers = load()
     return _run(trackers.ByteTrackTracker(frame_rate=fps), det, num_frames)
 
 
 def ocsort(det: MotTable, num_frames: int, fps: float) -> MotTable:
     """OC-SORT (Cao et al. 2023): observation-centric re-update and direction consistency."""
-    _check(num_frames, fps)
+    check_run(num_frames, fps)
     _, trackers = load()
     return _run(trackers.OCSORTTracker(frame_rate=fps), det, num_frames)
 
 
 def botsort(det: MotTable, num_frames: int, fps: float) -> MotTable:
     """BoT-SORT (Aharon et al. 2022) without images, so without its camera-motion step."""
-    _check(num_frames, fps)
+    check_run(num_frames, fps)
     _, trackers = load()
     return _run(trackers.BoTSORTTracker(frame_rate=fps), det, num_frames)
 
 
 def cbiou(det: MotTable, num_frames: int, fps: float) -> MotTable:
     """C-BIoU (Yang et al. 2023): matching on buffered (enlarged) boxes."""
-    _check(num_frames, fps)
+    check_run(num_frames, fps)
     _, trackers = load()
     return _run(trackers.CBIoUTracker(frame_rate=fps), det, num_frames)
 
