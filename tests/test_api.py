@@ -419,6 +419,22 @@ def test_a_box_cut_by_the_image_border_is_reported_with_the_states_outer_edge():
     assert 1960.0 < right < 2000.0
 
 
+def test_update_reports_the_cut_box_as_step_does():
+    """`update` hands back the caller's own box where the detection is the box, and the
+    state's outer edge where the border cuts it, as `step` does."""
+    by_step, by_update = (Tracker(TrackerConfig(camera_motion="none")) for _ in range(2))
+    inside = np.array([600.0, 400.0, 80.0, 200.0])
+    for t in range(34):
+        left = 1700.0 + 6.0 * t
+        walker = np.array([left, 420.0, min(80.0, 1920.0 - left), 200.0])
+        ltwh = np.stack([inside, walker])
+        a = by_step.step(ltwh)
+        b = by_update.update(from_ltwh(ltwh, "xyxy"))
+    np.testing.assert_allclose(to_ltwh(b.boxes, "xyxy"), a.boxes, atol=1e-9)
+    assert a.boxes[1, 0] + a.boxes[1, 2] > 1960.0
+    np.testing.assert_array_equal(b.boxes[0], from_ltwh(inside[None], "xyxy")[0])
+
+
 @pytest.mark.parametrize("motion", [np.eye(2), np.zeros((2, 4)), [[1, 0, np.nan], [0, 1, 0]]])
 def test_camera_motion_must_be_a_finite_2_by_3_matrix(motion):
     with pytest.raises(ValueError, match="camera_motion must be a finite 2 x 3 affine matrix"):
@@ -465,7 +481,7 @@ def test_moved_tracks_carry_every_corner_along_the_velocity(box_format):
 def test_update_returns_the_callers_own_boxes_for_detected_tracks():
     """A track that took a detection returns that detection's row as given, not its round
     trip through left, top, width, height (which moves a centre by a rounding)."""
-    boxes = np.array([[5.3, 400.7, 41.3, 103.9], [300.1, 500.3, 45.7, 110.3]])
+    boxes = np.array([[81.7, 400.7, 33.7, 103.9], [300.1, 500.3, 45.7, 110.3]])
     assert not np.array_equal(from_ltwh(to_ltwh(boxes, "cxcywh"), "cxcywh"), boxes)
     tracker = Tracker()
     for _ in range(4):

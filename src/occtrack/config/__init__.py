@@ -77,6 +77,8 @@ class TrackerConfig:
     # lengths below are in units of the box's own height h (h of the component's mean box)
     edge_noise: float = 0.069  # std of each measured box edge, h (12 px at h = 175 px)
     border_margin: float = 1.0  # an edge this close to the border is unmeasured, px
+    aspect_prior: bool = True  # an axis the border cuts takes its half-size from the other
+    # through the aspect ratio of the whole detections so far (occtrack.models.aspect)
 
     position_noise: float = 0.066  # process noise of box centres, h / sqrt(s)
     velocity_noise: float = 0.5  # of velocities, h / s / sqrt(s)

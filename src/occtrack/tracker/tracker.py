@@ -229,10 +229,14 @@ class Tracker:
         elif self._timestamp is not None:
             self._timestamp += self.filter.dt
         out = tracks.in_format(box_format)
-        detected = out.detection_index >= 0
-        if detected.any():  # the caller's own boxes, not a round trip through ltwh
+        index = out.detection_index
+        # the caller's own boxes, not a round trip through ltwh, where the box is the
+        # detection's (a box the image border cuts runs on to the state's edge: `_report_rows`)
+        copied = index >= 0
+        copied[copied] = (tracks.boxes[copied] == ltwh[index[copied]]).all(axis=1)
+        if copied.any():
             original = np.asarray(boxes, dtype=float).reshape(-1, 4)
-            out.boxes[detected] = original[out.detection_index[detected]]
+            out.boxes[copied] = original[index[copied]]
         return out
 
     def step(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
