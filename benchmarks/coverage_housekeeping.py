@@ -21,7 +21,7 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-SOURCE = "src/occtrack/filters/gmpmb.py"
+SOURCE = "src/occtrack/filters/gmpmb/__init__.py"  # the class (its kernels are compiled)
 CLASS = "GaussianMixturePMB"
 # the housekeeping methods named by issue 15: storage growth, capacity, trimming, labels and
 # recycling, merging, the existence guard, confirmation, the one-time warnings

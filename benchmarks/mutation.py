@@ -53,7 +53,7 @@ BOX_MODELS = [f"src/occtrack/models/{name}.py" for name in ("birth", "box", "mar
 # the box tracker's occlusion models (the highway's, extents.py and highway.py, go with it)
 BOX_OCCLUSION = ("base", "boxes", "box_geometry", "box_measurementwise", "box_objectwise")
 GROUPS = {
-    "filters": (["src/occtrack/filters/gmpmb.py", "src/occtrack/filters/beam_bernoulli.py"],
+    "filters": (["src/occtrack/filters/gmpmb/*", "src/occtrack/filters/beam_bernoulli.py"],
                 ["test_housekeeping.py", "test_tracker.py", "test_kernels.py", "test_lidar.py"]),
     "association": (["src/occtrack/association/*"], ["test_lbp.py", "test_association_exact.py"]),
     "occlusion": ([f"src/occtrack/occlusion/{name}.py" for name in BOX_OCCLUSION],

@@ -16,15 +16,9 @@ import pytest
 # the tracker package first: importing gmpmb alone runs into the circular import
 # gmpmb -> tracker.config -> tracker/__init__ -> tracker.tracker -> gmpmb
 import occtrack.tracker  # noqa: F401
-from occtrack.filters.gmpmb import (
-    INITIAL_POOL,
-    INITIAL_SLOTS,
-    N_BIRTH,
-    GaussianMixturePMB,
-    _cell_keys,
-    _packed_order,
-    _trim,
-)
+from occtrack.filters.gmpmb import INITIAL_POOL, INITIAL_SLOTS, N_BIRTH, GaussianMixturePMB
+from occtrack.filters.gmpmb.children import _trim
+from occtrack.filters.gmpmb.pool import _cell_keys, _packed_order
 from occtrack.models.box import edges_from_ltwh
 from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import NoOcclusion, OcclusionTerms

@@ -15,7 +15,16 @@ import numpy as np
 import pytest
 
 import occtrack.tracker  # noqa: F401  (the import order gmpmb needs)
-from occtrack.filters import gmpmb
+from occtrack.filters.gmpmb.children import _child_features, _trim
+from occtrack.filters.gmpmb.labels import _object_moments
+from occtrack.filters.gmpmb.pool import _cell_keys, _count_sizes, _packed_order, _pool_cells
+from occtrack.filters.gmpmb.prediction import (
+    _move_in_place,
+    _predict_in_place,
+    _relax_in_place,
+    _survive_in_place,
+)
+from occtrack.filters.gmpmb.weights import LOG_FLOOR, _hit_edges, _object_misses
 from occtrack.models.box import MIN_HEIGHT, heights
 from occtrack.models.motion import ConstantVelocity
 
@@ -38,7 +47,7 @@ def test_pool_cells_is_moment_matching_of_each_run(seed):
     order = rng.permutation(n)
     start = rng.random(n) < 0.3
     start[0] = True
-    got = gmpmb._pool_cells(order, start, mass, mean, cov, det, occ, coast, label)
+    got = _pool_cells(order, start, mass, mean, cov, det, occ, coast, label)
     runs = np.split(order, np.flatnonzero(start)[1:])
     assert len(got[0]) == len(runs)
     for g, run in enumerate(runs):
@@ -65,7 +74,7 @@ def test_predict_in_place_is_each_components_motion_model_in_box_heights():
     for model, rows in ((plain, ~coasting), (coast, coasting)):
         m, P = model.predict(mean[rows], cov[rows], heights(mean[rows]))
         expected[0][rows], expected[1][rows] = m, P
-    gmpmb._predict_in_place(mean, cov, coasting, plain.F, plain.Q, coast.F, coast.Q)
+    _predict_in_place(mean, cov, coasting, plain.F, plain.Q, coast.F, coast.Q)
     np.testing.assert_allclose(mean, expected[0], rtol=1e-13, atol=1e-9)
     np.testing.assert_allclose(cov, expected[1], rtol=1e-12, atol=1e-9)
     assert heights(expected[0][:1]) == MIN_HEIGHT
@@ -77,7 +86,7 @@ def test_object_moments_are_each_slots_mixture_moments():
     mass = rng.uniform(0.01, 0.3, 30)
     label = rng.integers(-1, 4, 30)
     label[label == 2] = -1  # slot 2 empty; slot 4 unused
-    r, means, sd = gmpmb._object_moments(label, mass, mean, cov, 5)
+    r, means, sd = _object_moments(label, mass, mean, cov, 5)
     for i in range(5):
         mine = label == i
         r_i = mass[mine].sum()
@@ -101,7 +110,7 @@ def test_object_misses_are_bincounts():
     mass, miss, det, occ, v, q = rng.random((6, n))
     slots = np.array([0, 2, 3, 5, 7, 8])  # the used slots, one per object row
     slot_hidden = np.full(10, 0.5)
-    miss_obj = gmpmb._object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden)
+    miss_obj = _object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden)
     r = np.bincount(rows, mass, minlength=A + 1)[:A]
     miss_mass = np.bincount(rows, mass * miss, minlength=A + 1)[:A]
     hidden = np.bincount(rows, mass * (det * occ * (1 - v + v * q)), minlength=A + 1)[:A]
@@ -120,8 +129,8 @@ def test_child_features_are_bayes_for_the_miss_and_the_hit_children():
     miss = 1 - det * (1 - occ + occ * v) + det * occ * v * q
     seen_hidden = rng.random(M)
     parent, j = rng.integers(0, K, C), rng.integers(-1, M, C)
-    d, o, x = gmpmb._child_features(parent, j, det, occ, occ_all, established, v, q, miss,
-                                    seen_hidden, coast, 0.04)
+    d, o, x = _child_features(parent, j, det, occ, occ_all, established, v, q, miss,
+                              seen_hidden, coast, 0.04)
     dk, ok, vk, hid = det[parent], occ[parent], v[parent], 1 - v[parent] + v[parent] * q[parent]
     escaped = vk * (1 - seen_hidden[np.maximum(j, 0)])
     hit = j >= 0
@@ -149,15 +158,15 @@ def test_hit_edges_keep_the_possible_pairs_and_sum_them_per_edge(use_seen, with_
     seen_hidden = rng.random(M)
     slot_class = rng.integers(0, 2, A)
     classes = rng.integers(0, 2, M) if with_classes else np.zeros(0, dtype=np.int64)
-    got = gmpmb._hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass,
-                           det, o_seen, v, seen_hidden, pd, use_seen, label, slot_class, classes)
+    got = _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, mass,
+                     det, o_seen, v, seen_hidden, pd, use_seen, label, slot_class, classes)
     out_k, out_j, out_hit, out_edge, poisson_hit, e_row, e_col, L_edge = got
 
     o = o_seen[pk]
     weight = (mass[pk] * det[pk] * (1 - o + o * v[pk] * (1 - seen_hidden[pj])) if use_seen
               else mass[pk] * pd[pk])
     value = np.exp(log_hit) * np.maximum(weight, 1e-300)
-    keep = value > math.exp(gmpmb.LOG_FLOOR)
+    keep = value > math.exp(LOG_FLOOR)
     if with_classes:
         keep &= (label[pk] < 0) | (slot_class[np.maximum(label[pk], 0)] == classes[pj])
     assert 0 < keep.sum() < len(keep)
@@ -183,7 +192,7 @@ def test_relax_survive_and_move_in_place_equal_their_array_forms():
     rng = np.random.default_rng(6)
     p = rng.random(20)
     expected = 0.8 + 0.3 * (p - 0.8)
-    gmpmb._relax_in_place(p, 0.8, 0.3)
+    _relax_in_place(p, 0.8, 0.3)
     np.testing.assert_allclose(p, expected, rtol=1e-15)
 
     mean, cov = components(rng, 40)
@@ -193,7 +202,7 @@ def test_relax_survive_and_move_in_place_equal_their_array_forms():
     size = np.array([1920.0, 1080.0])
     inside = ((mean[..., 0] >= 0) & (mean[..., 0] <= size) & (mean[..., 2] >= 1.0)).all(axis=1)
     expected = mass * np.where(inside, 0.97, 0.2)
-    gmpmb._survive_in_place(mass, mean, size, 0.97, 0.2)
+    _survive_in_place(mass, mean, size, 0.97, 0.2)
     np.testing.assert_allclose(mass, expected, rtol=1e-15)
     assert inside.any() and (~inside).any() and inside[:2].all() and not inside[2:4].any()
 
@@ -203,7 +212,7 @@ def test_relax_survive_and_move_in_place_equal_their_array_forms():
     expected_mean[..., 0] += shift
     expected_cov = cov * scale[:, None, None] ** 2
     expected_cov[:, :, 0, 0] += variance
-    gmpmb._move_in_place(mean, cov, scale, shift, variance)
+    _move_in_place(mean, cov, scale, shift, variance)
     np.testing.assert_allclose(mean, expected_mean, rtol=1e-14)
     np.testing.assert_allclose(cov, expected_cov, rtol=1e-14)
 
@@ -214,7 +223,7 @@ def test_count_sizes_adds_the_half_sizes_of_fully_measured_boxes():
     z = np.stack([low, low + rng.uniform(1, 200, (30, 2))], axis=-1)
     observed = rng.random((30, 2, 2)) < 0.85
     stats = np.ones((3, 2))
-    gmpmb._count_sizes(z, observed, stats)
+    _count_sizes(z, observed, stats)
     full = observed.all(axis=(1, 2))
     half = 0.5 * (z[full, :, 1] - z[full, :, 0])
     np.testing.assert_allclose(stats, 1 + np.stack([np.full(2, full.sum()), half.sum(axis=0),
@@ -229,14 +238,14 @@ def test_cell_keys_and_their_packed_order_equal_lexsort():
     label = rng.integers(-1, 4, 60)
     label[:20] = label[20:40]
     cell = np.array([0.5, 2.0, 0.25] * 2)
-    key = gmpmb._cell_keys(mean, label, cell)
+    key = _cell_keys(mean, label, cell)
     octave = np.round(np.log2(np.maximum(2 * mean[:, 1, 2], MIN_HEIGHT)))
     expected = np.concatenate([label[:, None], octave[:, None],
                                np.floor(mean.reshape(60, 6) / (cell * 2.0**octave[:, None]))],
                               axis=1)
     np.testing.assert_array_equal(key, expected.astype(np.int64))
 
-    fits, order, start = gmpmb._packed_order(key)
+    fits, order, start = _packed_order(key)
     reference = np.lexsort(key.T[::-1])
     ordered = key[reference]
     assert fits
@@ -246,7 +255,7 @@ def test_cell_keys_and_their_packed_order_equal_lexsort():
 
     wide = key.copy()
     wide[0, 2:] = 2**40  # eight keys spanning 2^40 do not pack into 62 bits
-    fits, order, start = gmpmb._packed_order(wide)
+    fits, order, start = _packed_order(wide)
     assert not fits and len(order) == 0 and len(start) == 0
 
 
@@ -268,10 +277,10 @@ def test_trim_keeps_each_objects_heaviest_and_rescales(cap):
         expected_keep[ranked[cap:]] = False
         expected_mass[members] *= mass[members].sum() / mass[ranked[:cap]].sum()
     got_mass = mass.copy()
-    keep = gmpmb._trim(got_mass, label, measurement, cap, L)
+    keep = _trim(got_mass, label, measurement, cap, L)
     np.testing.assert_array_equal(keep, expected_keep)
     np.testing.assert_allclose(got_mass, expected_mass, rtol=1e-14)
     assert (~keep).any() and keep[key < 0].all()
     untouched = mass.copy()
-    assert gmpmb._trim(untouched, label, measurement, n, L).all()
+    assert _trim(untouched, label, measurement, n, L).all()
     np.testing.assert_array_equal(untouched, mass)

@@ -13,40 +13,48 @@ import numpy as np
 import pytest
 
 from occtrack.association.lbp import _marginals
-from occtrack.filters.gmpmb import (
-    _all_pairs,
-    _append_births,
-    _association_weights,
-    _cap_in_place,
-    _cell_keys,
+from occtrack.filters.gmpmb.children import (
     _child_parents,
     _children,
-    _clipped,
+    _inherit,
+    _kept_children,
+    _trim,
+)
+from occtrack.filters.gmpmb.labels import (
+    _cap_in_place,
     _confirm_in_place,
     _count_in_place,
-    _inherit,
     _keep_labels,
-    _kept_children,
+    _open_slots,
+    _rank_bernoullis,
+    _split_ranked,
+)
+from occtrack.filters.gmpmb.pool import (
+    _append_births,
+    _cell_keys,
     _learnt_sizes,
     _merge_packed,
+    _packed_order,
+    _pool_cells,
+    _prior_sizes,
+    _sort_pool,
+)
+from occtrack.filters.gmpmb.prediction import (
+    _predict_in_place,
+    _predict_pool,
+    _relax_in_place,
+    _survive_in_place,
+)
+from occtrack.filters.gmpmb.weights import (
+    _all_pairs,
+    _association_weights,
+    _clipped,
     _miss_terms,
     _new_weights,
     _object_misses,
     _object_rows,
     _occludable,
-    _open_slots,
-    _packed_order,
-    _pool_cells,
-    _predict_in_place,
-    _predict_pool,
-    _prior_sizes,
-    _rank_bernoullis,
-    _relax_in_place,
-    _sort_pool,
-    _split_ranked,
     _strong_edges,
-    _survive_in_place,
-    _trim,
 )
 from occtrack.models.box import (
     _beyond_scores,
