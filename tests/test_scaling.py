@@ -135,13 +135,14 @@ def test_pair_likelihoods_and_box_update_equal_the_general_forms():
     np.testing.assert_allclose(model.loglik_pairs(means, zhat, S, z, observed, k, j),
                                model.loglik(means, covs, z, observed).ravel(), rtol=1e-10)
     pairs = rng.integers(0, M, K)
-    new = model.update(means, covs, z[pairs], observed[pairs])
+    new = model.update_edges(means, covs, z[pairs], observed[pairs])
     ref = gaussian.update(means, covs, model.H, model.R(means), z[pairs], observed[pairs])
     np.testing.assert_allclose(new[0], ref[0], rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(new[1], ref[1], rtol=1e-10, atol=1e-9)
     rows = np.flatnonzero(rng.random(K) < 0.5)
     in_place = means.copy(), covs.copy()
     model.update_rows(*in_place, rows, z, observed, pairs[rows])
+    new = model.update(means, covs, z[pairs], observed[pairs])
     for got, updated, before in zip(in_place, new, (means, covs), strict=True):
         expected = before.copy()
         expected[rows] = updated[rows]

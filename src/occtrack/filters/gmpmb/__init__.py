@@ -140,8 +140,8 @@ class GaussianMixturePMB:
         c = config
         self.config = c
         self.occlusion = occlusion
-        self.measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin)
-        self.aspect = AspectPrior() if c.aspect_prior else None
+        self.measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin,
+                                          AspectPrior() if c.aspect_prior else None)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
         self._dt_models: dict[float, tuple] = {}
@@ -256,8 +256,7 @@ class GaussianMixturePMB:
         self._use_dt(self.config.dt if dt is None else float(dt))
         observed = self.measurement.observed(z)
         self._learn_sizes(z, observed)
-        if self.aspect is not None:
-            self.aspect.learn(z, observed)
+        self.measurement.learn(z, observed)
         if camera is not None:
             self.move_image(*camera)
         self._predict()
@@ -391,8 +390,6 @@ class GaussianMixturePMB:
             self.dt)
         if len(h):
             self.measurement.update_rows(new_mean, new_cov, h, z, observed, j[h])
-            if self.aspect is not None:
-                self.aspect.update_rows(new_mean, new_cov, h, observed, j[h])
 
         new_label = self._assign_labels(new_mass, new_label, newborn, M, classes)
         new_mass, new_mean, new_cov, new_det, new_occ, new_coast, new_label = self._merge(
