@@ -12,12 +12,10 @@ and the ECE of the boxes of all seeds; the same for the overlap part alone (conf
 existence) of the detected boxes against the person behind their detection; and the
 reliability table.
 
-The exact form ("posterior": the posterior box about its mean) is the nearer one here, where
-the noise settings are the world's (about .01 too unsure: the filter's approximations);
-"detection" (the default, the posterior's spread about the detection) leaves out how far the
-detection lies from the posterior and is too sure. On the real MOT17 detections it is the
-other way round (README, "The confidence of a reported box"): the settings are wider than the
-detector's errors.
+The exact form ("posterior", the default: the posterior box about its mean) is the nearer one
+here, where the noise settings are the world's (about .01 too unsure: the filter's
+approximations); "detection" (the posterior's spread about the detection) leaves out how far
+the detection lies from the posterior and is too sure.
 """
 
 from __future__ import annotations

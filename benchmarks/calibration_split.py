@@ -1,6 +1,6 @@
 """Where occtrack's confidence is off: said against right, by the kind of reported box.
 
-    python benchmarks/calibration_split.py [--data DIR] [--confidence-centre posterior]
+    python benchmarks/calibration_split.py [--data DIR] [--confidence-centre detection]
 
 Each occlusion model, default settings, on MOT17-04, -05 and -11 (`--data`, else
 $OCCTRACK_DATA or ../shared/data/mot17). The reported boxes are scored as `occtrack eval
@@ -79,7 +79,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--data", default=None, help="folder of the MOT17 sequences")
     parser.add_argument("--sequences", default=SEQUENCES)
-    parser.add_argument("--confidence-centre", default="detection",
+    parser.add_argument("--confidence-centre", default="posterior",
                         choices=("detection", "posterior"))
     args = parser.parse_args()
     for name in args.sequences.split(","):

@@ -225,7 +225,7 @@ def test_eval_calibration_errors(tmp_path, capsys, argv, message):
 
 def test_confidence_centre_the_detection_or_the_posterior():
     """A standing person whose detection jumps sideways by a third of its width: about the
-    detection (the default) the box is as sure as before, about the posterior mean (which the
+    detection the box is as sure as before, about the posterior mean (the default, which the
     jump only partly moves) it is less sure; a coasting box is the same under both. An
     unknown form is refused by name."""
     person = np.array([[800.0, 400.0, 80.0, 200.0]])
@@ -274,8 +274,8 @@ def test_in_the_models_own_world_the_exact_form_keeps_its_word():
     (confidence over existence, `confidence_centre = "posterior"`) of a detected box against
     the person behind its detection is within .02 of the share right (about four standard
     errors; the gap left, near .01 too unsure, is the filter's approximations: mixture
-    reduction, gating, the coasting velocity's decay); the default form, which leaves out how
-    far the detection lies from the posterior, is too sure by more than .05 here
+    reduction, gating, the coasting velocity's decay); the detection-centred form, which leaves
+    out how far the detection lies from the posterior, is too sure by more than .05 here
     (benchmarks/calibration_model_world.py prints both over 6 seeds)."""
     from occtrack.scenarios.model_world import iou_with, model_world
 

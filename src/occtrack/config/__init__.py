@@ -69,10 +69,10 @@ class TrackerConfig:
     capacity: int = 0  # Gaussian components, all objects and the Poisson part (paper: 2048)
     max_labels: int = 0  # labelled Bernoullis; past the limit the weakest are recycled (paper: 72)
     report_existence: float = 0.5  # report an object when r exceeds this
-    # a detected box's confidence (occtrack.tracker.confidence) takes the posterior's spread
-    # about the detection itself, or about the posterior mean ("posterior": the exact form,
-    # calibrated where the noise settings match the detector; wider settings make it too low)
-    confidence_centre: str = "detection"
+    # a detected box's confidence (occtrack.tracker.confidence) takes the posterior box about
+    # its mean, the exact form ("posterior"), or the posterior's spread about the detection
+    # itself ("detection": leaves out how far the detection lies from the prediction; too sure)
+    confidence_centre: str = "posterior"
 
     # lengths below are in units of the box's own height h (h of the component's mean box)
     edge_noise: float = 0.069  # std of each measured box edge, h (12 px at h = 175 px)

@@ -10,12 +10,15 @@ with r_i the object's existence, b_i the reported box (the detection it took, or
 mean box while it coasts) and p_i its posterior box density, moment-matched to one Gaussian
 per image axis over (centre, half-size). A coasting box whose prediction has spread (time
 unseen, a camera that moves) is right less often, and its confidence says so. For a detected
-box the Gaussian is centred, by default, on the detection itself with the posterior's spread
-(`confidence_centre = "detection"`); the exact form centres it on the posterior mean
-("posterior"). The exact form is calibrated where the filter's noise settings are the
-detector's (benchmarks/calibration_model_world.py) and too unsure where they are wider, as
-the defaults are than the MOT17 detectors' errors; the default form leaves out how far the
-detection lies from the posterior and is nearer on real detections (README).
+box the Gaussian is, by default, the posterior itself, centred on its mean (the exact form,
+`confidence_centre = "posterior"`): a detection far from where the object was predicted
+moves the posterior only part of the way, and the box is less likely right. The other form
+("detection") centres the posterior's spread on the detection and leaves that distance out;
+it is too sure in a world drawn from the filter's own model
+(benchmarks/calibration_model_world.py). On MOT17 the exact form was too unsure while boxes
+cut by the image border kept a hidden edge no measurement pinned; since the border edge is
+measured through the aspect ratio and the censored update (`occtrack.models.box`) it is the
+calibrated one there too (README).
 
 The overlap probability has no closed form (IoU is a ratio of piecewise-linear areas), so it
 is a Monte Carlo average over `DRAWS` fixed standard-normal draws, the same for every box and
