@@ -27,7 +27,7 @@ machine hits both alike; the ratios are measured in this one run.
    frames per second of both (target: occtrack at least ByteTrack's at 200 and 400 people),
    and how many times the per-frame time grows from the smallest crowd to the largest
    (target: at most 10); then, per crowd, the share of person-frames whose person was detected
-   in that frame, within the last `report_coast_time` and ever (what any tracker could report).
+   in that frame, within the last `COAST` seconds and ever (what any tracker could report).
 """
 
 from __future__ import annotations
@@ -50,6 +50,7 @@ from occtrack.scenarios.pedestrians import (
 from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig
 
 DEFAULT = TrackerConfig().occlusion  # the crowds run the defaults
+COAST = 0.67  # s: the horizon of the 'recently detected' share
 
 
 def seen_shares(scene, within: int) -> tuple[float, float, float]:
@@ -194,14 +195,14 @@ def crowd_table(title: str, detector: Detector, people: list[int], num_frames: i
               f"{shares_text(occ[1], count, first):>17}{shares_text(bt[1], count, first):>18}"
               f"{scene.frames / occ[0]:>14.0f}{scene.frames / bt[0]:>15.0f}"
               f"{bt[0] / occ[0]:>7.2f}")
-        shares[count] = seen_shares(scene, round(TrackerConfig().report_coast_time * scene.fps))
+        shares[count] = seen_shares(scene, round(COAST * scene.fps))
     low, high = min(people), max(people)
     if low != high:
         print(f"  per-frame time from {low} to {high} people: occtrack "
               f"{per_frame[high][0] / per_frame[low][0]:.1f} x, ByteTrack "
               f"{per_frame[high][1] / per_frame[low][1]:.1f} x")
     print("  person-frames (after the first second) detected in that frame / within the "
-          "report_coast_time before / ever:")
+          f"{COAST} s before / ever:")
     for count, (now, recent, ever) in shares.items():
         print(f"  {count:>6}{now:>10.1%}{recent:>10.1%}{ever:>10.1%}")
 

@@ -88,8 +88,9 @@ def test_hidden_pedestrian_keeps_its_label_with_occlusion(seed):
 @pytest.mark.filterwarnings("ignore:max_labels = 24")  # hard limits on purpose
 def test_existence_in_unit_interval_and_labels_unique():
     scene = crowd_scene(Crowd(people=20, frames=160), seed=3)
+    # every object above report_existence that took a detection is reported (no confidence rule)
     tracker = Tracker(TrackerConfig(occlusion="measurement-wise", capacity=512,
-                                    max_labels=24))
+                                    max_labels=24, report_min_confidence=0.0))
     serial_of_id = {}
     for rows in scene.detections.frame_slices(scene.frames)[::2]:
         tracks = tracker.step(scene.detections.box[rows], scene.detections.score[rows])
@@ -224,8 +225,8 @@ def test_a_new_occlusion_model_plugs_in_without_filter_changes():
               for k in range(40)]
     results = {}
     for name, model in (("none", None), ("wall", Wall())):
-        config = TrackerConfig(occlusion="none", frame_step=1, fps=15, report_coast_time=10.0,
-                               report_centre_std=10.0)
+        config = TrackerConfig(occlusion="none", frame_step=1, fps=15,
+                               report_min_confidence=0.0)  # every object the filter holds
         results[name] = Tracker(config, occlusion=model).run(frames)
     assert set(results["wall"].frame) == set(range(1, 41))
     assert results["wall"].id.tolist() == [1] * 40

@@ -96,16 +96,19 @@ def person(frame: int) -> np.ndarray:
 
 @pytest.mark.parametrize("occlusion", MODELS)
 def test_a_person_who_vanishes_in_the_open_is_gone_in_bounded_time(occlusion):
-    """Seen for 2 s, then never again with nothing in front: reported for at most
-    `report_coast_time`, and its Bernoulli leaves the filter within 2 s."""
+    """Seen for 2 s, then never again with nothing in front: reported while its confidence,
+    falling with every miss, is at least `report_min_confidence` (a third of a second here,
+    each box at least that likely and less likely than the one before), and its Bernoulli
+    leaves the filter within 2 s."""
     config = TrackerConfig(occlusion=occlusion)
     tracker = Tracker(config)
     for f in range(60):
         assert len(tracker.step(person(f), [0.95])) == 1 or f < config.confirm_hits
-    shown = []
+    said = []
     for _ in range(60):
-        shown.append(len(tracker.step(np.zeros((0, 4)))))
-    assert sum(shown) <= round(config.report_coast_time * config.fps) + 1
+        said.extend(tracker.step(np.zeros((0, 4))).confidence)
+    assert 0 < len(said) <= round(config.fps / 3)
+    assert min(said) >= config.report_min_confidence and np.all(np.diff(said) < 0)
     assert not tracker.filter.slot_used.any()
 
 
@@ -113,7 +116,8 @@ def test_a_person_who_vanishes_in_the_open_is_gone_in_bounded_time(occlusion):
 def test_a_person_behind_a_standing_one_is_kept_while_the_cover_lasts(occlusion):
     """A person walks behind a bigger person standing nearer the camera and stays hidden:
     occlusion explains every miss, so the Bernoulli (and its id) is kept, though not shown
-    for longer than `report_coast_time`; once the cover walks away, the person is gone too."""
+    once its box's confidence has spread below `report_min_confidence`; once the cover walks
+    away, the person is gone too."""
     config = TrackerConfig(occlusion=occlusion)
     tracker = Tracker(config)
     front = np.array([[640.0, 440.0, 90.0, 260.0]])

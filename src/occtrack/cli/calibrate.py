@@ -25,7 +25,7 @@ and over one-second blocks of frames). Several GT DET pairs are pooled.
 clutter_rate, clutter_score_power, edge_noise) that `occtrack track --config` and a sweep's
 [work] config load; each setting's interval and every measurement are TOML comments. With
 --occlusion none the detectability is that of tracked pedestrians, P(detected | detected
-within the last 0.67 s, the tracker's report_coast_time): no occlusion model explains the
+within the last 0.67 s, a tracker's coasting horizon): no occlusion model explains the
 misses behind others, and the people the tracker does not hold are misses it never weighs;
 else that of visible ones (visibility >= 0.75). The report is printed too (--quiet: not).
 

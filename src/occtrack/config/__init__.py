@@ -116,13 +116,15 @@ class TrackerConfig:
     # explains the misses of confirmed objects only
     confirm_hits: int = 3
     confirm_window: int = 5
-    # an undetected object is reported while it has been unseen at most this long, s, and its
-    # centre is known to within report_centre_std box heights
-    report_coast_time: float = 0.67
-    report_centre_std: float = 0.1
-    # and of those only the boxes whose confidence (the probability that the box is a real
-    # object at that place, occtrack.tracker.confidence) is at least this; 0: all of them
-    report_min_confidence: float = 0.0
+    # a box is reported when its confidence (the probability that it is a real object at that
+    # place, occtrack.tracker.confidence) is at least this: by default, when it is more likely
+    # right than wrong; 0: every object with existence above report_existence
+    report_min_confidence: float = 0.5
+    # optional limits on top, off by default (the confidence does their work): an undetected
+    # object is reported only while unseen at most report_coast_time s and its centre known
+    # to within report_centre_std box heights (the defaults before the confidence: .67, .1)
+    report_coast_time: float | None = None
+    report_centre_std: float | None = None
 
     occlusion_gain: float = 2.0  # box geometry: clip(gain * overlap / area, 0, 1)
     occlusion_ramp: tuple[float, float] = (-0.1, 0.25)  # bottom-gap ramp, 0 at first, 1 at second
@@ -175,12 +177,14 @@ class TrackerConfig:
                              f", not {self.confidence_centre!r}")
         w, h = self.image_size
         positive = {"image width": w, "image height": h, "fps": self.fps,
-                    "edge_noise": self.edge_noise, "report_centre_std": self.report_centre_std,
+                    "edge_noise": self.edge_noise,
                     "birth_speed_std": self.birth_speed_std, "prune_mass": self.prune_mass,
                     "merge_position": self.merge_position, "merge_velocity": self.merge_velocity,
                     "lbp_tolerance": self.lbp_tolerance, "occlusion_gain": self.occlusion_gain,
                     "clutter_rate": self.clutter_rate, "score_floor": self.score_floor,
                     "gate_sigmas": self.gate_sigmas}
+        if self.report_centre_std is not None:
+            positive["report_centre_std"] = self.report_centre_std
         for name, value in positive.items():
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number, not {value}")
@@ -191,8 +195,9 @@ class TrackerConfig:
                         "spread_birth_rate": self.spread_birth_rate,
                         "initial_objects": self.initial_objects,
                         "inward_speed": self.inward_speed,
-                        "clutter_score_power": self.clutter_score_power,
-                        "report_coast_time": self.report_coast_time}
+                        "clutter_score_power": self.clutter_score_power}
+        if self.report_coast_time is not None:
+            non_negative["report_coast_time"] = self.report_coast_time
         for name, value in non_negative.items():
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be a number >= 0, not {value}")

@@ -11,8 +11,8 @@ and the others are false. From that:
 - detection probability P_D against the ground truth's visibility and box height, in bins and
   jointly; the stationary detectability of visible people (visibility >= `VISIBLE`: what an
   occlusion model needs, as it explains the misses behind others), that of tracked people
-  (P(hit | the person was detected within the last `horizon` seconds, the tracker's
-  `report_coast_time`: what `occlusion = none` needs, see `Calibration.settings`), and the
+  (P(hit | the person was detected within the last `horizon` seconds, `HORIZON`: what
+  `occlusion = none` needs, see `Calibration.settings`), and the
   lag-one memory of detection along each person's frames, which fixes the tracker's
   `detectability_ratio` (the Markov feature of `occtrack.models.markov`: for a two-state chain
   P(hit | hit) - P(hit | miss) is the memory per step, lambda = (1 - h) ** (dt / 0.5));
@@ -50,7 +50,6 @@ from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2, norm
 from scipy.stats import t as student_t
 
-from occtrack.config import TrackerConfig
 from occtrack.errors import OcctrackError
 from occtrack.io.mot import MotTable
 from occtrack.spatial import iou
@@ -64,6 +63,9 @@ BORDER = 2.0
 VISIBILITY_BINS = (0.0, 0.25, 0.5, 0.75, 1.0)
 HEIGHT_BINS = (0.0, 50.0, 100.0, 200.0, 400.0, math.inf)
 SCORE_BINS = (0.0, 0.5, 0.9, 0.99, 0.999, 1.0)
+HORIZON = 0.67
+"""s: how long after a person's last detection a tracker is taken to hold them (what occtrack
+reported an unseen object for before its confidence decided reporting)."""
 EDGES = ("left", "top", "right", "bottom")
 BOOTSTRAP = 400
 Z95 = float(norm.ppf(0.975))
@@ -138,7 +140,7 @@ class Calibration:
         model explains misses behind others) the detectability is that of visible people.
         Without, it is that of tracked people, not of every person: the tracker's P_D only
         weighs the misses of the objects it holds, and it holds a person from a detection
-        until `horizon` (its report_coast_time) of misses; the people it never detected, or
+        until about `horizon` of misses; the people it never detected, or
         lost long ago (deep in an occlusion), are misses it never scores, and counting them
         (P_D 0.55 on MOT17-04) makes each miss nearly free, so tracks of people who left or
         went out of sight coast on as false boxes."""
@@ -303,7 +305,7 @@ def _bins(values: np.ndarray, edges) -> np.ndarray:
 
 
 def calibrate(sequences: list[Labelled], seed: int = 0,
-              horizon: float = TrackerConfig.report_coast_time) -> Calibration:
+              horizon: float = HORIZON) -> Calibration:
     """Estimate the detector model from labelled sequences (see the module docstring);
     `horizon`: seconds after a person's last detection in which the tracker still holds
     them (the population of `detection_tracked`)."""

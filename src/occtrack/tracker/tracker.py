@@ -290,11 +290,12 @@ class Tracker:
         return np.ones(2), shift, error ** 2
 
     def tracks(self) -> Tracks:
-        """The objects reported now, by id: existence above `report_existence`, and either
-        detected at this step or unseen for at most `report_coast_time` with the centre known
-        to within `report_centre_std` box heights (a coasting estimate drifts, and a box
-        shown where nobody is costs more than one left out), and of those the ones whose
-        confidence is at least `report_min_confidence`. Boxes are left, top, width, height."""
+        """The objects reported now, by id: existence above `report_existence` and confidence
+        at least `report_min_confidence` (by default .5: a box more likely right than wrong;
+        a coasting estimate drifts, its confidence falls, and it goes), and, where the optional
+        coast limits are set, an undetected one only while unseen for at most
+        `report_coast_time` with its centre known to within `report_centre_std` box heights.
+        Boxes are left, top, width, height."""
         f, c = self.filter, self.config
         grow = len(f.slot_used) - len(self._report_id)
         if grow > 0:
@@ -305,7 +306,8 @@ class Tracker:
         shown, self._next_id = _reported(
             r, means, centre_std, f.slot_used, took, f.slot_coast, f.slot_serial,
             self._reported_serial, self._report_id, self._next_id, c.report_existence,
-            c.report_coast_time, c.report_centre_std)
+            math.inf if c.report_coast_time is None else c.report_coast_time,
+            math.inf if c.report_centre_std is None else c.report_centre_std)
         boxes, existence, velocities, index, classes, occluded = _report_rows(
             shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE,
             self._border)

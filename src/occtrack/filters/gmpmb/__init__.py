@@ -47,9 +47,10 @@ this honest on real detections:
   track alive;
 - a missed component's velocity relaxes to zero with `coast_velocity_time` (the motion
   model's Ornstein-Uhlenbeck velocity): people stop and turn behind others;
-- `occtrack.tracker` reports an undetected object only while it has been unseen for at most
-  `report_coast_time` and its centre is known to within `report_centre_std` box heights; it
-  is kept, unreported, for as long as m holds its existence, so its label survives.
+- `occtrack.tracker` reports an undetected object only while its confidence (existence times
+  the probability that its spreading box still overlaps the person) is at least
+  `report_min_confidence`; it is kept, unreported, for as long as m holds its existence, so
+  its label survives.
 
 Then the children lighter than `prune_mass` are dropped; each Bernoulli keeps at most its
 `max_components_per_object` heaviest, rescaled so that its existence is unchanged (only the
