@@ -179,6 +179,49 @@ def test_a_camera_that_stops_pairing_up_widens_every_prediction():
     assert variance[1] == 0.0 and 100.0 < variance[0] < 400.0  # (20 px)^2 remembered in part
 
 
+def test_expansion_is_fitted_exactly_and_is_zero_for_a_shift():
+    """People at several depths (heights) moved as a camera walking forward moves them:
+    each centre x -> x + shift + k h (x - centre), k = 2e-5 / px. The fit returns that k
+    (its variance ~0), and for a pure shift k = 0; the pairs' indices say which boxes paired."""
+    from occtrack.tracker.camera import estimate_camera, estimate_expansion, matched_pairs
+
+    centre = np.array([960.0, 540.0])
+    previous = np.array([[100.0 + 230 * i, 300.0 + 40 * (i % 3), 40.0 + 5 * i, 100.0 + 12 * i]
+                         for i in range(8)])
+    k = 2e-5
+    centres = previous[:, :2] + previous[:, 2:] / 2
+    current = previous.copy()
+    current[:, :2] += np.array([6.0, -3.0]) + k * previous[:, 3:4] * (centres - centre)
+    pairs, which = matched_pairs(previous, current)
+    assert which.tolist() == [[i, i] for i in range(8)]
+    fit = estimate_expansion(previous, current, centre)
+    assert fit[0] == pytest.approx(k, rel=1e-9) and fit[1] < 1e-20
+    shifted = previous + np.array([6.0, -3.0, 0.0, 0.0])
+    assert abs(estimate_expansion(previous, shifted, centre)[0]) < 1e-12
+    shift, error, expansion = estimate_camera(previous, current, centre)
+    assert expansion == fit and shift.tolist() == np.median(pairs, axis=0).tolist()
+
+
+def test_a_coasting_box_on_a_camera_walking_forward_is_less_sure():
+    """The expansion's spread widens a coasting box's confidence, by (k h (x - centre) t)^2,
+    growing with time unseen; a detected box and a still camera get none."""
+    from occtrack.tracker.tracker import _expansion_spread
+
+    means = np.zeros((3, 2, 3))
+    means[:, 0, 0], means[:, 1, 0] = [1500.0, 1500.0, 960.0], 540.0
+    means[:, 0, 2], means[:, 1, 2] = 40.0, 100.0
+    took = np.array([-1, 2, -1])
+    coast = np.array([0.2, 0.0, 0.4])
+    centre = np.array([960.0, 540.0])
+    out = _expansion_spread(np.arange(3), means, took, coast, 4e-8, centre)
+    lever = 200.0 * 0.2
+    assert out[0, 0, 0] == pytest.approx(4e-8 * (lever * 540.0) ** 2)
+    assert out[0, 1, 0] == 0.0 and out[0, 1, 1] == pytest.approx(4e-8 * (lever * 100.0) ** 2)
+    assert not out[1].any()  # took a detection
+    assert out[2, 0, 0] == 0.0 and out[2, 0, 1] > out[0, 0, 1]  # at the centre; longer unseen
+    assert not _expansion_spread(np.arange(3), means, took, coast, 0.0, centre).any()
+
+
 GT = "1,1,0,0,10,10,1,1,1\n1,2,100,0,10,10,1,1,1\n2,1,2,0,10,10,1,1,1\n2,2,100,0,10,10,1,1,1\n"
 # frame 1: both right (.9, .8); frame 2: one right (.6), one false box (.2), one at IoU 8/12
 # against pedestrian 2, right (1.0)

@@ -77,12 +77,56 @@ def estimate_motion(previous: np.ndarray, current: np.ndarray,
     shift plus each person's own step; the median of P of them has the standard error
     sqrt(pi / 2) sigma / sqrt(P) (normal steps), sigma their spread by the median absolute
     deviation (1.4826 MAD), robust to the pairs that are no match."""
-    pairs = matched_shifts(previous, current, **settings)
-    if pairs is None:
-        return None
+    matched = matched_pairs(previous, current, **settings)
+    return None if matched is None else _shift_and_error(matched[0])
+
+
+def _shift_and_error(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     shift = _median_rows(pairs)
     sigma = 1.4826 * _median_rows(np.abs(pairs - shift))
     return shift, math.sqrt(math.pi / 2.0) * sigma / math.sqrt(len(pairs))
+
+
+def estimate_camera(previous: np.ndarray, current: np.ndarray, centre: np.ndarray,
+                    **settings) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None] | None:
+    """`estimate_motion` and `estimate_expansion` from one matching: (shift, its standard
+    error, (k, its variance) or None); None when too few boxes pair up."""
+    matched = matched_pairs(previous, current, **settings)
+    if matched is None:
+        return None
+    return (*_shift_and_error(matched[0]),
+            _expansion(*matched, previous, current, centre))
+
+
+def estimate_expansion(previous: np.ndarray, current: np.ndarray, centre: np.ndarray,
+                       **settings) -> tuple[float, float] | None:
+    """What the one shift leaves out: a camera that moves forward or back moves each point
+    away from (or toward) the focus of expansion, by (x - centre) Z'/Z, and a person's depth
+    Z is inversely proportional to their box height h, so the displacement is k h (x - centre)
+    with one k (per frame, 1 / px) for the whole scene. Fitted by least squares to the matched
+    pairs' displacements, the shift as the intercept, centre the image's: (k, its variance);
+    None when too few boxes pair up. Not applied to the boxes (as an estimate it is
+    biased by the people's own steps, like a uniform scale): it says how far a prediction
+    drifts that only follows the shift (`Tracker._camera_motion`)."""
+    matched = matched_pairs(previous, current, **settings)
+    return None if matched is None else _expansion(*matched, previous, current, centre)
+
+
+def _expansion(pairs, which, previous, current, centre) -> tuple[float, float] | None:
+    """`estimate_expansion` given the matched pairs (`matched_pairs`): least squares of the
+    displacements on the levers h (x - centre) with the shift as each axis's intercept."""
+    previous, current = np.asarray(previous, dtype=float), np.asarray(current, dtype=float)
+    i, j = which[:, 0], which[:, 1]
+    height = np.sqrt(previous[i, 3] * current[j, 3])
+    lever = height[:, None] * (_centres(previous[i]) - np.asarray(centre, dtype=float))
+    lever = lever - lever.mean(axis=0)
+    residual = pairs - pairs.mean(axis=0)
+    norm = float((lever * lever).sum())
+    if not norm > 0:
+        return None
+    k = float((residual * lever).sum()) / norm
+    dof = max(residual.size - 3, 1)  # two intercepts and k
+    return k, float(((residual - k * lever) ** 2).sum()) / dof / norm
 
 
 def matched_shifts(previous: np.ndarray, current: np.ndarray, height_ratio: float = 1.25,
@@ -90,15 +134,24 @@ def matched_shifts(previous: np.ndarray, current: np.ndarray, height_ratio: floa
                    min_pairs: int = 3) -> np.ndarray | None:
     """Steps 1-3 up to the median: the displacements (P, 2) of the box pairs matched after
     the mode, in the order of the previous boxes; None when fewer than `min_pairs`."""
+    matched = matched_pairs(previous, current, height_ratio, mode_radius, min_iou, min_pairs)
+    return None if matched is None else matched[0]
+
+
+def matched_pairs(previous: np.ndarray, current: np.ndarray, height_ratio: float = 1.25,
+                  mode_radius: float = 0.05, min_iou: float = 0.5,
+                  min_pairs: int = 3) -> tuple[np.ndarray, np.ndarray] | None:
+    """`matched_shifts` and which boxes each pair is: (displacements (P, 2), (previous,
+    current) indices (P, 2)); None when fewer than `min_pairs`."""
     if len(previous) < min_pairs or len(current) < min_pairs:
         return None
     if len(previous) * len(current) > DENSE_PAIRS:
         return _estimate_sparse(previous, current, height_ratio, mode_radius, min_iou,
                                 min_pairs)
-    found, pairs = _estimate_dense(np.asarray(previous, dtype=float),
-                                   np.asarray(current, dtype=float), height_ratio, mode_radius,
-                                   min_iou, min_pairs)
-    return pairs if found else None
+    found, pairs, which = _estimate_dense(np.asarray(previous, dtype=float),
+                                          np.asarray(current, dtype=float), height_ratio,
+                                          mode_radius, min_iou, min_pairs)
+    return (pairs, which) if found else None
 
 
 @njit
@@ -122,7 +175,8 @@ def _iou(a, i, b, j):
 
 @njit
 def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_pairs):
-    """Steps 1-3 over every pair of boxes: (found, the matched pairs' displacements)."""
+    """Steps 1-3 over every pair of boxes: (found, the matched pairs' displacements, their
+    (previous, current) box indices)."""
     N, M = len(previous), len(current)
     cp = previous[:, :2] + previous[:, 2:] / 2.0
     cc = current[:, :2] + current[:, 2:] / 2.0
@@ -136,7 +190,7 @@ def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_p
                 unit[C] = math.sqrt(previous[i, 3] * current[j, 3])
                 C += 1
     if C < min_pairs:
-        return False, np.zeros((0, 2))
+        return False, np.zeros((0, 2)), np.zeros((0, 2), dtype=np.int64)
     mode = _mode_shift(candidates[:C], mode_radius * unit[:C])  # 2. the mode
     moved = previous.copy()  # 3. mutual best IoU after the mode, and the median
     moved[:, 0] += mode[0]
@@ -149,20 +203,23 @@ def _estimate_dense(previous, current, height_ratio, mode_radius, min_iou, min_p
     for j in range(M):
         best_prev[j] = np.argmax(overlap[:, j])
     pairs = np.empty((N, 2))
+    which = np.empty((N, 2), dtype=np.int64)
     P = 0
     for i in range(N):
         j = np.argmax(overlap[i])
         if best_prev[j] == i and overlap[i, j] > min_iou:
             pairs[P, 0], pairs[P, 1] = cc[j, 0] - cp[i, 0], cc[j, 1] - cp[i, 1]
+            which[P, 0], which[P, 1] = i, j
             P += 1
     if P < min_pairs:
-        return False, np.zeros((0, 2))
-    return True, pairs[:P]
+        return False, np.zeros((0, 2)), np.zeros((0, 2), dtype=np.int64)
+    return True, pairs[:P], which[:P]
 
 
 def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: float,
-                     mode_radius: float, min_iou: float, min_pairs: int) -> np.ndarray | None:
-    """`matched_shifts` on the pairs that can qualify only; the same result."""
+                     mode_radius: float, min_iou: float,
+                     min_pairs: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """`matched_pairs` on the pairs that can qualify only; the same result."""
     previous, current = np.asarray(previous, dtype=float), np.asarray(current, dtype=float)
     cp, cc = _centres(previous), _centres(current)
     candidates, unit = _candidates_within_reach(previous, current, cp, cc, height_ratio)
@@ -172,10 +229,10 @@ def _estimate_sparse(previous: np.ndarray, current: np.ndarray, height_ratio: fl
     moved = previous.copy()
     moved[:, :2] += mode
     p, c = overlapping_pairs(_edges(moved), _edges(current))
-    shifts = _mutual_shifts(p, c, moved, current, cp, cc, min_iou)
+    shifts, which = _mutual_shifts(p, c, moved, current, cp, cc, min_iou)
     if len(shifts) < min_pairs:
         return None
-    return shifts
+    return shifts, which
 
 
 def sparse_candidates(previous: np.ndarray, current: np.ndarray,
@@ -225,7 +282,8 @@ def _candidates(i, j, hp, hc, cp, cc, height_ratio, M):
 def _mutual_shifts(p, c, moved, current, cp, cc, min_iou):
     """Step 3 on the overlapping pairs (p, c) of moved previous and current boxes: the
     displacement of every pair that is each other's best IoU (ties: the lower index, as
-    argmax), above min_iou, in the order of the previous boxes."""
+    argmax), above min_iou, in the order of the previous boxes, and the pairs' (previous,
+    current) indices."""
     E = len(p)
     overlap = np.empty(E)
     for e in range(E):
@@ -234,13 +292,15 @@ def _mutual_shifts(p, c, moved, current, cp, cc, min_iou):
     best_iou, best_cur = _first_best(p, overlap, c, N)
     _, best_prev = _first_best(c, overlap, p, M)
     shifts = np.empty((N, 2))
+    which = np.empty((N, 2), dtype=np.int64)
     P = 0
     for k in range(N):
         if best_prev[best_cur[k]] == k and best_iou[k] > min_iou:
             b = best_cur[k]
             shifts[P, 0], shifts[P, 1] = cc[b, 0] - cp[k, 0], cc[b, 1] - cp[k, 1]
+            which[P, 0], which[P, 1] = k, b
             P += 1
-    return shifts[:P]
+    return shifts[:P], which[:P]
 
 
 @njit

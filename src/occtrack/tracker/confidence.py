@@ -73,20 +73,24 @@ def box_covariances(label, mass, mean, cov, r, means, L):
 
 
 def report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected,
-                      on_detection: bool) -> np.ndarray:
+                      on_detection: bool, widen: np.ndarray | None = None) -> np.ndarray:
     """The confidence of the reported boxes (`Tracker.tracks`): slots `shown` (K,) with their
     reported `boxes` (K, 4) left, top, width, height, `detected` (K,) those that took a
     detection. `label`, `mass`, `mean`, `cov` are the filter's components and `r`, `means`
     its slots' existence and mean states (`object_moments`). A detected box's Gaussian is
-    centred on the box itself when `on_detection`, else on the posterior mean. (K,)"""
+    centred on the box itself when `on_detection`, else on the posterior mean. `widen` (K, 2,
+    2), per box and axis, adds to the variances of (centre, half-size) what the filter leaves
+    out (the camera's expansion for a coasting box: `Tracker.tracks`); None: nothing. (K,)"""
+    K = len(shown)
+    widen = np.zeros((K, 2, 2)) if widen is None else np.asarray(widen, dtype=float)
     return _report_confidence(label, mass, mean, cov, r, means, shown,
-                              np.asarray(boxes, dtype=float), detected, on_detection, RIGHT_IOU,
-                              _Z, _REACH)
+                              np.asarray(boxes, dtype=float), detected, on_detection, widen,
+                              RIGHT_IOU, _Z, _REACH)
 
 
 @njit
 def _report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected, on_detection,
-                       threshold, z, reach):
+                       widen, threshold, z, reach):
     covariances = box_covariances(label, mass, mean, cov, r, means, len(r))
     K = len(shown)
     centre, half = np.empty((K, 2)), np.empty((K, 2))
@@ -96,6 +100,9 @@ def _report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected,
         k = shown[a]
         existence[a] = r[k]
         spread[a] = covariances[k]
+        for axis in range(2):
+            spread[a, axis, 0, 0] += widen[a, axis, 0]
+            spread[a, axis, 1, 1] += widen[a, axis, 1]
         for axis in range(2):
             if on_detection and detected[a]:
                 half[a, axis] = boxes[a, 2 + axis] / 2.0

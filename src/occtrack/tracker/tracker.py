@@ -49,7 +49,7 @@ from occtrack.tracker.boxes import (
     from_ltwh,
     to_ltwh,
 )
-from occtrack.tracker.camera import estimate_motion
+from occtrack.tracker.camera import estimate_camera
 from occtrack.tracker.confidence import report_confidence
 
 CAMERA_MEMORY = 1.0
@@ -183,6 +183,7 @@ class Tracker:
         self._boxes = np.zeros((0, 4))  # the last step's detections (camera shift, reports)
         self._timestamp: float | None = None
         self._camera_power = np.zeros(2)
+        self._expansion_power = 0.0  # 1 / (px s)^2: the camera's recent squared expansion rate
 
     def update(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
                classes: npt.ArrayLike | None = None, timestamp: float | None = None,
@@ -276,16 +277,25 @@ class Tracker:
 
     def _camera_motion(self, boxes: np.ndarray, dt: float) -> tuple[np.ndarray, ...]:
         """The camera's shift from the last frame's detections to these, and its variance:
-        the estimate's own (how well the detections pin it, `estimate_motion`) or, where
+        the estimate's own (how well the detections pin it, `estimate_camera`) or, where
         too few boxes pair up and the shift is taken as 0, the camera's recent mean square
         shift (how fast it has been moving: an exponential average over `CAMERA_MEMORY`
         seconds). Every prediction widens by that variance, coasting boxes included, so a
-        camera that turns makes their confidence fall (a still camera: about 0)."""
-        motion = estimate_motion(self._boxes, boxes)
+        camera that turns makes their confidence fall (a still camera: about 0).
+
+        The same memory keeps the camera's recent squared expansion rate (`_expansion_power`,
+        `estimate_expansion`: k^2 less its variance, so that a still camera's noise averages to
+        0, per second squared): what the one shift leaves out, which `tracks` adds to the
+        spread of a coasting box's confidence."""
+        centre = np.asarray(self.config.image_size, dtype=float) / 2.0
+        motion = estimate_camera(self._boxes, boxes, centre)
+        keep = math.exp(-dt / CAMERA_MEMORY)
+        expansion = motion[2] if motion is not None else None
+        rate = 0.0 if expansion is None else (expansion[0] ** 2 - expansion[1]) / dt ** 2
+        self._expansion_power = keep * self._expansion_power + (1.0 - keep) * rate
         if motion is None:
             return np.ones(2), np.zeros(2), self._camera_power.copy()
-        shift, error = motion
-        keep = math.exp(-dt / CAMERA_MEMORY)
+        shift, error = motion[0], motion[1]
         self._camera_power = keep * self._camera_power + (1.0 - keep) * shift ** 2
         return np.ones(2), shift, error ** 2
 
@@ -312,9 +322,12 @@ class Tracker:
             shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE,
             self._border)
         n = f.n
+        widen = _expansion_spread(shown, means, took, f.slot_coast,
+                                  max(self._expansion_power, 0.0),
+                                  np.asarray(c.image_size, dtype=float) / 2.0)
         confidence = report_confidence(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                                        shown, boxes, index >= 0,
-                                       c.confidence_centre == "detection")
+                                       c.confidence_centre == "detection", widen)
         tracks = Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
                         occluded, confidence)
         if c.report_min_confidence > 0:
@@ -422,6 +435,28 @@ def _report_rows(shown, r, means, took, detections, hidden, classes, occluded_ab
         else:
             occluded[a] = hidden[k] > occluded_above
     return boxes, existence, velocities, index, cls, occluded
+
+
+@njit
+def _expansion_spread(shown, means, took, coast, power, centre):
+    """Per reported slot and image axis the variance (centre, half-size) that a coasting box's
+    confidence adds for the camera's expansion (`Tracker._camera_motion`): the filter follows
+    the one shift, and a box unseen for t s drifts from its prediction by k h (x - centre) t,
+    k the expansion rate (1 / (px s)), h its height; k^2 is taken as the recent `power`, and
+    the half-size grows alike (k h s t). On any camera, resolution and frame rate: k is
+    measured from that video's detections in its own units, and a still camera's is 0. (K, 2,
+    2); 0 for boxes that took a detection (the measurement pins them)."""
+    K = len(shown)
+    out = np.zeros((K, 2, 2))
+    for a in range(K):
+        k = shown[a]
+        if took[k] >= 0:
+            continue
+        lever = 2.0 * means[k, 1, 2] * coast[k]
+        for axis in range(2):
+            out[a, axis, 0] = power * (lever * (means[k, axis, 0] - centre[axis])) ** 2
+            out[a, axis, 1] = power * (lever * means[k, axis, 2]) ** 2
+    return out
 
 
 @njit
