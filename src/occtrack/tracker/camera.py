@@ -13,8 +13,12 @@ people move by their own small amounts. Two consecutive frames' detections give 
    best IoU above `min_iou`) and the median of those pairs' displacements is the estimate.
 
 Under `min_pairs` matched pairs there is no estimate (None) and the tracker assumes a still
-camera for that frame. A uniform scale is not estimated: measured on MOT17-11, a similarity
+camera for that frame. A uniform scale is not applied: measured on MOT17-11, a similarity
 fit (also RANSAC, LMedS) is biased by the people's own motion and tracks worse (DESIGN 2.2).
+What the one shift leaves out is measured instead, as an uncertainty: a camera walking
+forward moves each point away from the image centre by k h (x - centre), h the box height
+standing for inverse depth (`estimate_expansion`); the tracker widens a coasting box's
+confidence by it.
 Written here because no maintained library estimates image motion from boxes alone (OpenCV's
 estimators need image features).
 
