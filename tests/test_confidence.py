@@ -203,23 +203,34 @@ def test_expansion_is_fitted_exactly_and_is_zero_for_a_shift():
 
 
 def test_a_coasting_box_on_a_camera_walking_forward_is_less_sure():
-    """The expansion's spread widens a coasting box's confidence, by (k h (x - centre) t)^2,
-    growing with time unseen; a detected box and a still camera get none."""
-    from occtrack.tracker.tracker import _expansion_spread
+    """The expansion's drift widens a coasting box's confidence, by (k h (x - centre) t)^2 on
+    the centre and (k h s t)^2 on the half-size, growing with time unseen; none at the centre
+    of the image, for a still camera, or for a box that took a detection."""
+    from occtrack.tracker.confidence import drift_variance, report_confidence
 
-    means = np.zeros((3, 2, 3))
-    means[:, 0, 0], means[:, 1, 0] = [1500.0, 1500.0, 960.0], 540.0
-    means[:, 0, 2], means[:, 1, 2] = 40.0, 100.0
-    took = np.array([-1, 2, -1])
-    coast = np.array([0.2, 0.0, 0.4])
+    mean = np.zeros((2, 3))
+    mean[:, 0], mean[0, 2], mean[1, 2] = (1500.0, 540.0), 40.0, 100.0
     centre = np.array([960.0, 540.0])
-    out = _expansion_spread(np.arange(3), means, took, coast, 4e-8, centre)
     lever = 200.0 * 0.2
-    assert out[0, 0, 0] == pytest.approx(4e-8 * (lever * 540.0) ** 2)
-    assert out[0, 1, 0] == 0.0 and out[0, 1, 1] == pytest.approx(4e-8 * (lever * 100.0) ** 2)
-    assert not out[1].any()  # took a detection
-    assert out[2, 0, 0] == 0.0 and out[2, 0, 1] > out[0, 0, 1]  # at the centre; longer unseen
-    assert not _expansion_spread(np.arange(3), means, took, coast, 0.0, centre).any()
+    got = drift_variance(mean, 0.2, 4e-8, centre, 0)
+    assert got[0] == pytest.approx(4e-8 * (lever * 540.0) ** 2)
+    assert got[1] == pytest.approx(4e-8 * (lever * 40.0) ** 2)
+    assert drift_variance(mean, 0.2, 4e-8, centre, 1)[0] == 0.0  # at the centre's height
+    assert drift_variance(mean, 0.4, 4e-8, centre, 0)[0] == pytest.approx(4 * got[0])
+    assert drift_variance(mean, 0.2, 0.0, centre, 0) == (0.0, 0.0)
+    # one object of one component, shown coasting and then as if detected
+    label, mass = np.array([0]), np.array([1.0])
+    cov = np.tile(np.diag([4.0, 1.0, 2.0]), (1, 2, 1, 1))
+    means = mean[None]
+    box = np.array([[1460.0, 440.0, 80.0, 200.0]])
+    said = {}
+    for detected in (False, True):
+        for power in (0.0, 1e-7):
+            said[detected, power] = report_confidence(
+                label, mass, means, cov, np.ones(1), means, np.array([0]), box,
+                np.array([detected]), False, np.array([0.5]), power, centre)[0]
+    assert said[False, 1e-7] < said[False, 0.0] - 0.1
+    assert said[True, 1e-7] == said[True, 0.0]
 
 
 GT = "1,1,0,0,10,10,1,1,1\n1,2,100,0,10,10,1,1,1\n2,1,2,0,10,10,1,1,1\n2,2,100,0,10,10,1,1,1\n"

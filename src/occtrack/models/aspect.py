@@ -63,7 +63,8 @@ class AspectPrior:
     def update_rows(self, means: np.ndarray, covs: np.ndarray, rows: np.ndarray,
                     observed: np.ndarray, measurement: np.ndarray) -> None:
         """In place: component rows[i], just updated by detection measurement[i], takes the
-        pseudo-measurement of the half-size its detection's border hides."""
+        pseudo-measurement of the half-size its detection's border hides (`BoxMeasurement`
+        calls the kernel itself, fused with its own border step)."""
         moments = self.moments()
         if moments is None or len(rows) == 0:
             return

@@ -34,7 +34,7 @@ from scipy.special import log_ndtr
 
 from occtrack.densities import gaussian
 from occtrack.jit import njit
-from occtrack.models.aspect import AspectPrior
+from occtrack.models.aspect import AspectPrior, _aspect_update
 
 H_EDGES = np.array([[1.0, 0.0, -1.0], [1.0, 0.0, 1.0]])
 MIN_HEIGHT = 4.0  # px: the scale of a degenerate box
@@ -187,11 +187,10 @@ class BoxMeasurement:
         rows = np.asarray(rows, dtype=np.int64)
         measurement = np.asarray(measurement, dtype=np.int64)
         _update_pairs(means, covs, rows, z, observed, measurement, self.edge_noise)
-        if _every_edge_measured(observed):
-            return
-        if self.aspect is not None:
-            self.aspect.update_rows(means, covs, rows, observed, measurement)
-        _beyond_update(means, covs, rows, observed, measurement, self.edge_noise, self._border)
+        moments = None if self.aspect is None else self.aspect.moments()
+        mu, sigma = (0.0, 0.0) if moments is None else moments
+        _cut_update(means, covs, rows, observed, measurement, self.edge_noise, self._border,
+                    moments is not None, mu, sigma)
 
 
 @njit
@@ -374,6 +373,18 @@ def _innovation(means, covs, edge_noise):
             S[k, axis, 0, 1] = P[0, 0] + P[0, 2] - P[2, 0] - P[2, 2]
             S[k, axis, 1, 0] = P[0, 0] - P[0, 2] + P[2, 0] - P[2, 2]
     return zhat, S
+
+
+@njit
+def _cut_update(means, covs, rows, observed, measurement, edge_noise, border, use_aspect, mu,
+                sigma):
+    """`update_rows`' steps after the edges, in one call: the aspect ratio's
+    (`occtrack.models.aspect._aspect_update`, when `use_aspect`), then `_beyond_update`."""
+    if _every_edge_measured(observed):
+        return
+    if use_aspect:
+        _aspect_update(means, covs, rows, observed, measurement, mu, sigma)
+    _beyond_update(means, covs, rows, observed, measurement, edge_noise, border)
 
 
 @njit

@@ -118,19 +118,45 @@ def estimate_expansion(previous: np.ndarray, current: np.ndarray, centre: np.nda
 
 def _expansion(pairs, which, previous, current, centre) -> tuple[float, float] | None:
     """`estimate_expansion` given the matched pairs (`matched_pairs`): least squares of the
-    displacements on the levers h (x - centre) with the shift as each axis's intercept."""
-    previous, current = np.asarray(previous, dtype=float), np.asarray(current, dtype=float)
-    i, j = which[:, 0], which[:, 1]
-    height = np.sqrt(previous[i, 3] * current[j, 3])
-    lever = height[:, None] * (_centres(previous[i]) - np.asarray(centre, dtype=float))
-    lever = lever - lever.mean(axis=0)
-    residual = pairs - pairs.mean(axis=0)
-    norm = float((lever * lever).sum())
-    if not norm > 0:
-        return None
-    k = float((residual * lever).sum()) / norm
-    dof = max(residual.size - 3, 1)  # two intercepts and k
-    return k, float(((residual - k * lever) ** 2).sum()) / dof / norm
+    displacements on the levers h (x - centre) with the shift as each axis's intercept
+    (`_expansion_fit`)."""
+    found, k, variance = _expansion_fit(pairs, which, np.asarray(previous, dtype=float),
+                                        np.asarray(current, dtype=float),
+                                        np.asarray(centre, dtype=float))
+    return (k, variance) if found else None
+
+
+@njit
+def _expansion_fit(pairs, which, previous, current, centre):
+    """(found, k, its variance): with lever l = sqrt(h_prev h_cur) (previous centre - centre)
+    and displacement d per pair and axis, both about their means over the pairs,
+    k = sum(d l) / sum(l^2) and var k = sum((d - k l)^2) / (2 P - 3) / sum(l^2) (two intercepts
+    and k); not found when the levers do not vary."""
+    P = len(pairs)
+    lever = np.empty((P, 2))
+    mean_l, mean_d = np.zeros(2), np.zeros(2)
+    for p in range(P):
+        i, j = which[p, 0], which[p, 1]
+        height = math.sqrt(previous[i, 3] * current[j, 3])
+        for a in range(2):
+            lever[p, a] = height * (previous[i, a] + previous[i, 2 + a] / 2.0 - centre[a])
+            mean_l[a] += lever[p, a] / P
+            mean_d[a] += pairs[p, a] / P
+    norm, cross = 0.0, 0.0
+    for p in range(P):
+        for a in range(2):
+            lever[p, a] -= mean_l[a]
+            norm += lever[p, a] * lever[p, a]
+            cross += (pairs[p, a] - mean_d[a]) * lever[p, a]
+    if not norm > 0.0:
+        return False, 0.0, 0.0
+    k = cross / norm
+    rss = 0.0
+    for p in range(P):
+        for a in range(2):
+            e = pairs[p, a] - mean_d[a] - k * lever[p, a]
+            rss += e * e
+    return True, k, rss / max(2 * P - 3, 1) / norm
 
 
 def matched_shifts(previous: np.ndarray, current: np.ndarray, height_ratio: float = 1.25,

@@ -73,24 +73,41 @@ def box_covariances(label, mass, mean, cov, r, means, L):
 
 
 def report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected,
-                      on_detection: bool, widen: np.ndarray | None = None) -> np.ndarray:
+                      on_detection: bool, coast: np.ndarray | None = None,
+                      expansion_power: float = 0.0,
+                      centre: np.ndarray | None = None) -> np.ndarray:
     """The confidence of the reported boxes (`Tracker.tracks`): slots `shown` (K,) with their
     reported `boxes` (K, 4) left, top, width, height, `detected` (K,) those that took a
     detection. `label`, `mass`, `mean`, `cov` are the filter's components and `r`, `means`
     its slots' existence and mean states (`object_moments`). A detected box's Gaussian is
-    centred on the box itself when `on_detection`, else on the posterior mean. `widen` (K, 2,
-    2), per box and axis, adds to the variances of (centre, half-size) what the filter leaves
-    out (the camera's expansion for a coasting box: `Tracker.tracks`); None: nothing. (K,)"""
-    K = len(shown)
-    widen = np.zeros((K, 2, 2)) if widen is None else np.asarray(widen, dtype=float)
+    centred on the box itself when `on_detection`, else on the posterior mean. A coasting box's
+    Gaussian widens by what the filter leaves out, the camera's expansion (`drift_variance`):
+    `coast` the slots' time unseen (s), `expansion_power` the camera's recent k^2 and `centre`
+    the image centre. (K,)"""
+    if coast is None or not expansion_power > 0:
+        coast, expansion_power = np.zeros(len(r)), 0.0
+    centre = np.zeros(2) if centre is None else np.asarray(centre, dtype=float)
     return _report_confidence(label, mass, mean, cov, r, means, shown,
-                              np.asarray(boxes, dtype=float), detected, on_detection, widen,
-                              RIGHT_IOU, _Z, _REACH)
+                              np.asarray(boxes, dtype=float), detected, on_detection, coast,
+                              float(expansion_power), centre, RIGHT_IOU, _Z, _REACH)
+
+
+@njit
+def drift_variance(mean, unseen, power, image_centre, axis):
+    """The variances (centre, half-size) on `axis` that a coasting box's confidence adds for the
+    camera's expansion (`occtrack.tracker.camera.estimate_expansion`): the filter follows the
+    one shift a frame, and a box unseen for t s drifts from its prediction by k h (x - centre) t,
+    k the expansion rate (1 / (px s)), h its height; k^2 is taken as the camera's recent
+    `power`, and the half-size grows alike (k h s t). On any camera, resolution and frame rate:
+    k is measured from that video's detections in its own units, and a still camera's is 0."""
+    lever = 2.0 * mean[1, 2] * unseen
+    return (power * (lever * (mean[axis, 0] - image_centre[axis])) ** 2,
+            power * (lever * mean[axis, 2]) ** 2)
 
 
 @njit
 def _report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected, on_detection,
-                       widen, threshold, z, reach):
+                       coast, power, image_centre, threshold, z, reach):
     covariances = box_covariances(label, mass, mean, cov, r, means, len(r))
     K = len(shown)
     centre, half = np.empty((K, 2)), np.empty((K, 2))
@@ -100,9 +117,12 @@ def _report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected,
         k = shown[a]
         existence[a] = r[k]
         spread[a] = covariances[k]
-        for axis in range(2):
-            spread[a, axis, 0, 0] += widen[a, axis, 0]
-            spread[a, axis, 1, 1] += widen[a, axis, 1]
+        if power > 0.0 and not detected[a]:
+            for axis in range(2):
+                add_centre, add_half = drift_variance(means[k], coast[k], power, image_centre,
+                                                      axis)
+                spread[a, axis, 0, 0] += add_centre
+                spread[a, axis, 1, 1] += add_half
         for axis in range(2):
             if on_detection and detected[a]:
                 half[a, axis] = boxes[a, 2 + axis] / 2.0

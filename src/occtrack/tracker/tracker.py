@@ -169,6 +169,7 @@ class Tracker:
             occlusion = box_occlusion(c.occlusion, geometry, c.occluder_min_existence)
         self.occlusion = occlusion
         size, margin = np.asarray(c.image_size, dtype=float), c.border_margin
+        self._centre = size / 2.0  # the focus of the camera's expansion (`_camera_motion`)
         self._border = np.stack([np.full(2, margin), size - margin], axis=-1)  # BoxMeasurement's
         self.reset()
 
@@ -287,8 +288,7 @@ class Tracker:
         `estimate_expansion`: k^2 less its variance, so that a still camera's noise averages to
         0, per second squared): what the one shift leaves out, which `tracks` adds to the
         spread of a coasting box's confidence."""
-        centre = np.asarray(self.config.image_size, dtype=float) / 2.0
-        motion = estimate_camera(self._boxes, boxes, centre)
+        motion = estimate_camera(self._boxes, boxes, self._centre)
         keep = math.exp(-dt / CAMERA_MEMORY)
         expansion = motion[2] if motion is not None else None
         rate = 0.0 if expansion is None else (expansion[0] ** 2 - expansion[1]) / dt ** 2
@@ -322,15 +322,13 @@ class Tracker:
             shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE,
             self._border)
         n = f.n
-        widen = _expansion_spread(shown, means, took, f.slot_coast,
-                                  max(self._expansion_power, 0.0),
-                                  np.asarray(c.image_size, dtype=float) / 2.0)
         confidence = report_confidence(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                                        shown, boxes, index >= 0,
-                                       c.confidence_centre == "detection", widen)
+                                       c.confidence_centre == "detection", f.slot_coast,
+                                       self._expansion_power, self._centre)
         tracks = Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
                         occluded, confidence)
-        if c.report_min_confidence > 0:
+        if c.report_min_confidence > 0 and confidence.min(initial=1.0) < c.report_min_confidence:
             tracks = tracks.select(confidence >= c.report_min_confidence)
         return tracks
 
@@ -435,28 +433,6 @@ def _report_rows(shown, r, means, took, detections, hidden, classes, occluded_ab
         else:
             occluded[a] = hidden[k] > occluded_above
     return boxes, existence, velocities, index, cls, occluded
-
-
-@njit
-def _expansion_spread(shown, means, took, coast, power, centre):
-    """Per reported slot and image axis the variance (centre, half-size) that a coasting box's
-    confidence adds for the camera's expansion (`Tracker._camera_motion`): the filter follows
-    the one shift, and a box unseen for t s drifts from its prediction by k h (x - centre) t,
-    k the expansion rate (1 / (px s)), h its height; k^2 is taken as the recent `power`, and
-    the half-size grows alike (k h s t). On any camera, resolution and frame rate: k is
-    measured from that video's detections in its own units, and a still camera's is 0. (K, 2,
-    2); 0 for boxes that took a detection (the measurement pins them)."""
-    K = len(shown)
-    out = np.zeros((K, 2, 2))
-    for a in range(K):
-        k = shown[a]
-        if took[k] >= 0:
-            continue
-        lever = 2.0 * means[k, 1, 2] * coast[k]
-        for axis in range(2):
-            out[a, axis, 0] = power * (lever * (means[k, axis, 0] - centre[axis])) ** 2
-            out[a, axis, 1] = power * (lever * means[k, axis, 2]) ** 2
-    return out
 
 
 @njit
