@@ -25,8 +25,8 @@ scalar Kalman update of that half-size after the edge update (`BoxMeasurement.up
 the measured edge of the cut axis then places the hidden one. (The two axes' errors are taken
 as independent, as the state's axes are.) A box cut on both axes (a corner) is left as it was.
 
-Hand-written: the update is two scalar Kalman steps on a 3-state block, compiled (`occtrack.jit`)
-as the edge update is.
+Hand-written: the update is one scalar Kalman step on a 3-state block a row, compiled
+(`occtrack.jit`) as the edge update is.
 """
 
 from __future__ import annotations
