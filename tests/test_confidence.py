@@ -113,6 +113,14 @@ def test_the_blocks_bounds_change_no_count():
     expected = ((union > 0) & (inter >= 0.5 * union)).mean(axis=1)
     assert np.array_equal(got, expected)
     assert (got == 1).sum() > 30 and (got == 0).sum() > 30 and ((got > 0) & (got < 1)).sum() > 30
+    # with a floor: a box at or above it gets its exact value, one below it a bound under it
+    need = rng.uniform(0.0, 1.0, n)
+    floored = confidence._overlap_probability(centre, half, cov, reported, 0.5, z,
+                                              confidence._REACH, need)
+    above = expected >= need
+    assert np.array_equal(floored[above], expected[above])
+    assert np.all(floored[~above] < need[~above]) and np.all(floored[~above] >= expected[~above])
+    assert (~above).sum() > 100 and (floored[~above] > expected[~above]).sum() > 30
 
 
 def test_box_covariances_of_a_mixture():

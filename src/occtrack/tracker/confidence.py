@@ -75,7 +75,7 @@ def box_covariances(label, mass, mean, cov, r, means, L):
 def report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected,
                       on_detection: bool, coast: np.ndarray | None = None,
                       expansion_power: float = 0.0,
-                      centre: np.ndarray | None = None) -> np.ndarray:
+                      centre: np.ndarray | None = None, floor: float = 0.0) -> np.ndarray:
     """The confidence of the reported boxes (`Tracker.tracks`): slots `shown` (K,) with their
     reported `boxes` (K, 4) left, top, width, height, `detected` (K,) those that took a
     detection. `label`, `mass`, `mean`, `cov` are the filter's components and `r`, `means`
@@ -83,13 +83,15 @@ def report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected,
     centred on the box itself when `on_detection`, else on the posterior mean. A coasting box's
     Gaussian widens by what the filter leaves out, the camera's expansion (`drift_variance`):
     `coast` the slots' time unseen (s), `expansion_power` the camera's recent k^2 and `centre`
-    the image centre. (K,)"""
+    the image centre. A box below `floor` (the reporting threshold) is only known to be
+    below it: its value is an upper bound under `floor` (0: every value exact). (K,)"""
     if coast is None or not expansion_power > 0:
         coast, expansion_power = np.zeros(len(r)), 0.0
     centre = np.zeros(2) if centre is None else np.asarray(centre, dtype=float)
     return _report_confidence(label, mass, mean, cov, r, means, shown,
                               np.asarray(boxes, dtype=float), detected, on_detection, coast,
-                              float(expansion_power), centre, RIGHT_IOU, _Z, _REACH)
+                              float(expansion_power), centre, float(floor), RIGHT_IOU, _Z,
+                              _REACH)
 
 
 @njit
@@ -107,7 +109,7 @@ def drift_variance(mean, unseen, power, image_centre, axis):
 
 @njit
 def _report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected, on_detection,
-                       coast, power, image_centre, threshold, z, reach):
+                       coast, power, image_centre, floor, threshold, z, reach):
     covariances = box_covariances(label, mass, mean, cov, r, means, len(r))
     K = len(shown)
     centre, half = np.empty((K, 2)), np.empty((K, 2))
@@ -129,7 +131,13 @@ def _report_confidence(label, mass, mean, cov, r, means, shown, boxes, detected,
                 centre[a, axis] = boxes[a, axis] + half[a, axis]
             else:
                 centre[a, axis], half[a, axis] = means[k, axis, 0], means[k, axis, 2]
-    return existence * _overlap_probability(centre, half, spread, boxes, threshold, z, reach)
+    # a box whose existence cannot carry it to `floor` needs only to be known below it
+    need = np.zeros(K)
+    if floor > 0.0:
+        for a in range(K):
+            need[a] = floor / max(existence[a], 1e-300)
+    return existence * _overlap_probability(centre, half, spread, boxes, threshold, z, reach,
+                                            need)
 
 
 def overlap_probability(centre: np.ndarray, half: np.ndarray, covariance: np.ndarray,
@@ -139,7 +147,8 @@ def overlap_probability(centre: np.ndarray, half: np.ndarray, covariance: np.nda
     (centre, half-size), `reported` (n, 4) left, top, width, height. (n,) probabilities."""
     return _overlap_probability(np.asarray(centre, dtype=float), np.asarray(half, dtype=float),
                                 np.asarray(covariance, dtype=float),
-                                np.asarray(reported, dtype=float), float(threshold), _Z, _REACH)
+                                np.asarray(reported, dtype=float), float(threshold), _Z, _REACH,
+                                np.zeros(len(centre)))
 
 
 @njit
@@ -149,7 +158,10 @@ def _overlap(c, s, lo, hi):
 
 
 @njit
-def _overlap_probability(centre, half, covariance, reported, threshold, z, reach):
+def _overlap_probability(centre, half, covariance, reported, threshold, z, reach, need):
+    """`overlap_probability`, block by block (`_decided`); box i stops as soon as even every
+    draw left could not lift its count to `need[i]` (a probability; 0: never), and then its
+    value is that bound, below need[i] (the reporting rule drops it whatever it is)."""
     n, S, B = len(centre), len(z), len(reach)
     block = S // B
     out = np.zeros(n)
@@ -163,6 +175,9 @@ def _overlap_probability(centre, half, covariance, reported, threshold, z, reach
         area = reported[i, 2] * reported[i, 3]
         hits = 0
         for b in range(B):
+            if hits + (B - b) * block < need[i] * S:
+                hits += (B - b) * block  # the bound: every draw left a hit
+                break
             decided = _decided(centre[i], half[i], root, reported[i], area, threshold,
                                reach[b])
             if decided == 1:

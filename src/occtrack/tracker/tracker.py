@@ -325,7 +325,8 @@ class Tracker:
         confidence = report_confidence(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                                        shown, boxes, index >= 0,
                                        c.confidence_centre == "detection", f.slot_coast,
-                                       self._expansion_power, self._centre)
+                                       self._expansion_power, self._centre,
+                                       c.report_min_confidence)
         tracks = Tracks(self._report_id[shown], boxes, existence, velocities, index, classes,
                         occluded, confidence)
         if c.report_min_confidence > 0 and confidence.min(initial=1.0) < c.report_min_confidence:
