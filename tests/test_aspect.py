@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from occtrack.models.aspect import MIN_BOXES, AspectPrior
+from occtrack.models.aspect import MIN_BOXES, AspectPrior, _aspect_update
 from occtrack.models.box import BoxMeasurement, edges_from_ltwh
 from occtrack.tracker import Tracker, TrackerConfig
 
@@ -48,12 +48,16 @@ def test_nothing_before_enough_boxes():
     z = edges_from_ltwh(np.array([[10.0, 10.0, 20.0, 60.0]] * (MIN_BOXES - 1)))
     prior.learn(z, np.ones(z.shape, bool))
     assert prior.moments() is None
+    # the measurement model then updates a cut box as it does without the prior
     means, covs = _random_states(np.random.default_rng(0), 3)
-    before = means.copy(), covs.copy()
     observed = np.ones((1, 2, 2), bool)
     observed[0, 1, 1] = False
-    prior.update_rows(means, covs, np.arange(3), observed.repeat(3, 0), np.zeros(3, np.int64))
-    assert np.array_equal(means, before[0]) and np.array_equal(covs, before[1])
+    cut = edges_from_ltwh(np.array([[300.0, 400.0, 40.0, 81.0]])).repeat(3, 0)
+    args = np.arange(3), cut, observed.repeat(3, 0), np.zeros(3, np.int64)
+    with_prior, without = (means.copy(), covs.copy()), (means.copy(), covs.copy())
+    BoxMeasurement((640.0, 480.0), aspect=prior).update_rows(*with_prior, *args)
+    BoxMeasurement((640.0, 480.0)).update_rows(*without, *args)
+    assert np.array_equal(with_prior[0], without[0]) and np.array_equal(with_prior[1], without[1])
     prior.learn(z[:1], np.ones((1, 2, 2), bool))
     assert prior.moments() is not None
 
@@ -77,8 +81,8 @@ def test_update_is_the_scalar_kalman_update(seed):
     mu, sigma = -1.05, 0.14
     prior.stats[:] = (MIN_BOXES, MIN_BOXES * mu, MIN_BOXES * (mu * mu + sigma * sigma))
     new_means, new_covs = means.copy(), covs.copy()
-    prior.update_rows(new_means, new_covs, rows, observed, np.arange(M))
     got_mu, got_sigma = prior.moments()
+    _aspect_update(new_means, new_covs, rows, observed, np.arange(M), got_mu, got_sigma)
     for j, k in enumerate(rows):
         whole = observed[j].all(axis=1)
         if whole[0] == whole[1]:

@@ -88,16 +88,17 @@ def reliability_table(confidence: np.ndarray, right: np.ndarray, bins: int = BIN
         raise ValueError("confidences must be probabilities in [0, 1]")
     if bins < 1:
         raise ValueError(f"bins must be at least 1, not {bins}")
-    edges = np.linspace(0.0, 1.0, bins + 1)
     which = np.minimum(np.floor(confidence * bins).astype(np.int64), bins - 1)
-    count = np.bincount(which, minlength=bins)
-    total_conf = np.bincount(which, weights=confidence, minlength=bins)
-    total_right = np.bincount(which, weights=right.astype(float), minlength=bins)
+    return _from_totals(np.linspace(0.0, 1.0, bins + 1), np.bincount(which, minlength=bins),
+                        np.bincount(which, weights=confidence, minlength=bins),
+                        np.bincount(which, weights=right.astype(float), minlength=bins))
+
+
+def _from_totals(edges, count, total_conf, total_right) -> Reliability:
+    """The table from per-bin box counts, summed confidences and right boxes."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        mean_conf = total_conf / count
-        share = total_right / count
-    n = max(int(count.sum()), 1)
-    ece = float(np.abs(total_conf - total_right).sum() / n)
+        mean_conf, share = total_conf / count, total_right / count
+    ece = float(np.abs(total_conf - total_right).sum() / max(int(count.sum()), 1))
     return Reliability(edges, count, mean_conf, share, ece)
 
 
@@ -115,10 +116,6 @@ def pooled(tables: list[Reliability]) -> Reliability:
         return reliability_table(np.zeros(0), np.zeros(0, bool))
     if len({len(t.boxes) for t in tables}) > 1:
         raise ValueError("tables with different bins cannot be pooled")
-    count = sum(t.boxes for t in tables)
-    conf = sum(np.nan_to_num(t.confidence * t.boxes) for t in tables)
-    right = sum(np.nan_to_num(t.right * t.boxes) for t in tables)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_conf, share = conf / count, right / count
-    ece = float(np.abs(conf - right).sum() / max(int(count.sum()), 1))
-    return Reliability(tables[0].edges, count, mean_conf, share, ece)
+    return _from_totals(tables[0].edges, sum(t.boxes for t in tables),
+                        sum(np.nan_to_num(t.confidence * t.boxes) for t in tables),
+                        sum(np.nan_to_num(t.right * t.boxes) for t in tables))

@@ -42,8 +42,9 @@ MIN_BOXES = 10
 
 
 class AspectPrior:
-    """The class's aspect ratio, learnt from whole detections (`learn`), measuring the half-size
-    of an axis the image border cuts (`update_rows`)."""
+    """The class's aspect ratio, learnt from whole detections (`learn`); its `moments` feed
+    `_aspect_update`, the half-size of an axis the image border cuts, which
+    `BoxMeasurement.update_rows` calls with its own border step."""
 
     def __init__(self) -> None:
         self.stats = np.zeros(3)  # count, sum and sum of squares of log(width / height)
@@ -59,17 +60,6 @@ class AspectPrior:
             return None
         mu = total / count
         return mu, math.sqrt(max(squares / count - mu * mu, 0.0))
-
-    def update_rows(self, means: np.ndarray, covs: np.ndarray, rows: np.ndarray,
-                    observed: np.ndarray, measurement: np.ndarray) -> None:
-        """In place: component rows[i], just updated by detection measurement[i], takes the
-        pseudo-measurement of the half-size its detection's border hides (`BoxMeasurement`
-        calls the kernel itself, fused with its own border step)."""
-        moments = self.moments()
-        if moments is None or len(rows) == 0:
-            return
-        _aspect_update(means, covs, np.asarray(rows, dtype=np.int64), observed,
-                       np.asarray(measurement, dtype=np.int64), *moments)
 
 
 @njit
