@@ -226,3 +226,24 @@ def test_clusters_from_exactly_cluster_min_pairs_and_exact_fixed_points():
     assert lbp_sparse(pairs, pairs, half, one, one).iterations == 1
     one_less = lbp_sparse(pairs[1:], pairs[1:], w_hit[1:], w_miss, w_new)
     assert one_less.clusters == 1
+
+
+def test_one_cluster_kernel_is_the_clustered_path_on_one_cluster(monkeypatch):
+    """Below CLUSTER_MIN_PAIRS the pairs run as one cluster in one compiled call; on a graph
+    that is one connected cluster that call gives the clustered path's numbers to the bit
+    (same messages, same order of the sums)."""
+    rng = np.random.default_rng(7)
+    n, m = 6, 5
+    w_hit = rng.uniform(0.1, 1.0, (n, m)) * (rng.random((n, m)) < 0.6)
+    w_hit[np.arange(n), np.arange(n) % m] = 0.7  # every object and measurement connected
+    w_hit[0, :] = 0.3
+    w_miss, w_new = rng.uniform(0.1, 1.0, n), rng.uniform(0.05, 0.5, m)
+    i, j = np.nonzero(w_hit)
+    small = lbp_sparse(i, j, w_hit[i, j], w_miss, w_new, tol=1e-9)
+    monkeypatch.setattr(lbp_module, "CLUSTER_MIN_PAIRS", 1)
+    clustered = lbp_sparse(i, j, w_hit[i, j], w_miss, w_new, tol=1e-9)
+    assert clustered.clusters == small.clusters == 1
+    assert small.iterations == clustered.iterations > 1
+    for a, b in ((small.p_hit, clustered.p_hit), (small.p_miss, clustered.p_miss),
+                 (small.p_new, clustered.p_new)):
+        assert np.array_equal(a, b)

@@ -117,18 +117,34 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
     n, m, E = len(w_miss), len(w_new), len(rows)
     if E == 0:
         return SparseMarginals(np.zeros(0), np.ones(n), np.ones(m), 0, 0)
+    if E < CLUSTER_MIN_PAIRS:  # one cluster: the whole of it in one compiled call
+        return SparseMarginals(*_one_cluster(rows, cols, w_hit, w_miss, w_new, tol, max_iter),
+                               1)
     ratio = w_hit / w_miss[rows]
-    if E >= CLUSTER_MIN_PAIRS:
-        count, cluster = clusters_of(rows, cols, n, m)
-        order = np.argsort(cluster, kind="stable")
-        sizes = np.bincount(cluster, minlength=count)
-    else:
-        count, order, sizes = 1, np.arange(E), np.array([E])
+    count, cluster = clusters_of(rows, cols, n, m)
+    order = np.argsort(cluster, kind="stable")
+    sizes = np.bincount(cluster, minlength=count)
     grouped, iterations = _iterate_clusters(rows[order], cols[order], ratio[order],
                                             w_new[cols[order]], sizes[sizes > 0], n, m, tol,
                                             max_iter)
     p_hit, p_miss, p_new = _marginals(rows, cols, ratio, grouped, order, w_new, n)
     return SparseMarginals(p_hit, p_miss, p_new, iterations, count)
+
+
+@njit
+def _one_cluster(rows, cols, w_hit, w_miss, w_new, tol, max_iter):
+    """`lbp_sparse` of pairs taken as one cluster (the pair order is the cluster's):
+    (p_hit, p_miss, p_new, iterations), the same numbers as the clustered path gives."""
+    E = len(rows)
+    ratio, new = np.empty(E), np.empty(E)
+    for e in range(E):
+        ratio[e] = w_hit[e] / w_miss[rows[e]]
+        new[e] = w_new[cols[e]]
+    sizes = np.full(1, E, dtype=np.int64)
+    nu, iterations = _iterate_clusters(rows, cols, ratio, new, sizes, len(w_miss), len(w_new),
+                                       tol, max_iter)
+    p_hit, p_miss, p_new = _marginals(rows, cols, ratio, nu, np.arange(E), w_new, len(w_miss))
+    return p_hit, p_miss, p_new, iterations
 
 
 @njit

@@ -186,11 +186,10 @@ class BoxMeasurement:
         `loglik` weighs the component by)."""
         rows = np.asarray(rows, dtype=np.int64)
         measurement = np.asarray(measurement, dtype=np.int64)
-        _update_pairs(means, covs, rows, z, observed, measurement, self.edge_noise)
         moments = None if self.aspect is None else self.aspect.moments()
         mu, sigma = (0.0, 0.0) if moments is None else moments
-        _cut_update(means, covs, rows, observed, measurement, self.edge_noise, self._border,
-                    moments is not None, mu, sigma)
+        _update_rows(means, covs, rows, z, observed, measurement, self.edge_noise, self._border,
+                     moments is not None, mu, sigma)
 
 
 @njit
@@ -376,9 +375,18 @@ def _innovation(means, covs, edge_noise):
 
 
 @njit
+def _update_rows(means, covs, rows, z, observed, measurement, edge_noise, border, use_aspect,
+                 mu, sigma):
+    """`update_rows` in one call: the measured edges (`_update_pairs`), then `_cut_update`."""
+    _update_pairs(means, covs, rows, z, observed, measurement, edge_noise)
+    _cut_update(means, covs, rows, observed, measurement, edge_noise, border, use_aspect, mu,
+                sigma)
+
+
+@njit
 def _cut_update(means, covs, rows, observed, measurement, edge_noise, border, use_aspect, mu,
                 sigma):
-    """`update_rows`' steps after the edges, in one call: the aspect ratio's
+    """`update_rows`' steps after the edges: the aspect ratio's
     (`occtrack.models.aspect._aspect_update`, when `use_aspect`), then `_beyond_update`."""
     if _every_edge_measured(observed):
         return

@@ -85,7 +85,9 @@ def estimate_motion(previous: np.ndarray, current: np.ndarray,
     return None if matched is None else _shift_and_error(matched[0])
 
 
-def _shift_and_error(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+@njit
+def _shift_and_error(pairs):
+    """(median shift, its standard error) of the displacements (P, 2): `estimate_motion`."""
     shift = _median_rows(pairs)
     sigma = 1.4826 * _median_rows(np.abs(pairs - shift))
     return shift, math.sqrt(math.pi / 2.0) * sigma / math.sqrt(len(pairs))
