@@ -13,9 +13,6 @@ import warnings
 import numpy as np
 import pytest
 
-# the tracker package first: importing gmpmb alone runs into the circular import
-# gmpmb -> tracker.config -> tracker/__init__ -> tracker.tracker -> gmpmb
-import occtrack.tracker  # noqa: F401
 from occtrack.filters.gmpmb import INITIAL_POOL, INITIAL_SLOTS, N_BIRTH, GaussianMixturePMB
 from occtrack.filters.gmpmb.children import _trim
 from occtrack.filters.gmpmb.pool import _cell_keys, _packed_order

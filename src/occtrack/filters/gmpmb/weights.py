@@ -43,7 +43,7 @@ def _occludable(label, mass, occ_all, used, hits, confirm_hits, stationary):
 @njit
 def _miss_terms(det, occ, visible, hidden):
     """(v, q, P_D, miss) per component, v and q clipped to [0, 1]: P_D = d (1 - o + o v) and
-    miss = 1 - P_D + d o v q (the module docstring's occlusion line)."""
+    miss = 1 - P_D + d o v q (the occlusion line of `occtrack.filters.gmpmb`'s docstring)."""
     n = len(det)
     v, q, pd, miss = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     for k in range(n):
