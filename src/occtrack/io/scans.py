@@ -1,0 +1,258 @@
+"""Lidar scan files and their ground truth, as a user's own 2-D scanner could write them.
+
+scans.csv, one row a beam, rows in time order, the beams of one scan sharing its time:
+
+    time,angle,range
+    0.000000,-3.137229,4.2831
+    0.000000,-3.128502,inf
+
+time in seconds, angle in radians counter-clockwise from the sensor's heading, range in metres,
+`inf` where the beam returned nothing (as ROS's REP 117 has a LaserScan report "no return").
+Lines starting with `#` are comments; `key=value` words in them are kept as the file's settings
+(the simulator writes its sensor's there). `nan` and negative ranges are errors, as is a time
+earlier than the row before: a bad row stops the read with the file, line and problem.
+
+truth.csv, one row an object a scan (world frame; `sensor.csv` gives the sensor's pose):
+
+    time,id,shape,x,y,vx,vy,length,width,heading,clear_beams,visible_beams,occluded
+
+shape `disc` (length = width = its diameter) or `rect`; clear_beams: beams that would reach
+the object were it alone; visible_beams: beams whose first surface it is; occluded: 1 when
+clear_beams > 0 and visible_beams == 0 (fully occluded). sensor.csv: `time,x,y,heading`.
+
+Reading is vectorised (numpy parses every cell at once); only when that fails are the rows
+walked one by one to name the first bad cell.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from occtrack.errors import OcctrackError, opening
+
+SCAN_COLUMNS = ("time", "angle", "range")
+TRUTH_COLUMNS = ("time", "id", "shape", "x", "y", "vx", "vy", "length", "width", "heading",
+                 "clear_beams", "visible_beams", "occluded")
+POSE_COLUMNS = ("time", "x", "y", "heading")
+SHAPES = ("disc", "rect")
+
+
+# -- writing --------------------------------------------------------------------------------------
+
+def header(columns: tuple[str, ...], comments: list[str]) -> str:
+    """Comment lines, then the column names."""
+    return "".join(f"# {c}\n" for c in comments) + ",".join(columns) + "\n"
+
+
+def scan_rows(time: float, angle_text: list[str], ranges: np.ndarray) -> str:
+    """One scan's rows; `angle_text` the beams' angles already formatted (they repeat)."""
+    t = f"{time:.6f}"
+    return "".join(f"{t},{a},{r:.4f}\n" for a, r in zip(angle_text, ranges.tolist(),
+                                                      strict=True))
+
+
+def angle_text(angle: np.ndarray) -> list[str]:
+    return [f"{a:.6f}" for a in angle.tolist()]
+
+
+def truth_rows(time: float, ids: np.ndarray, disc: np.ndarray, centre: np.ndarray,
+               velocity: np.ndarray, length: np.ndarray, width: np.ndarray,
+               heading: np.ndarray, clear: np.ndarray, visible: np.ndarray) -> str:
+    """One scan's truth rows, an object each."""
+    t = f"{time:.6f}"
+    rows = zip(ids.tolist(), disc.tolist(), centre.tolist(), velocity.tolist(), length.tolist(),
+               width.tolist(), heading.tolist(), clear.tolist(), visible.tolist(), strict=True)
+    return "".join(
+        f"{t},{i},{'disc' if d else 'rect'},{x:.4f},{y:.4f},{vx:.4f},{vy:.4f},{ln:.4f},"
+        f"{w:.4f},{h:.6f},{c},{v},{int(c > 0 and v == 0)}\n"
+        for i, d, (x, y), (vx, vy), ln, w, h, c, v in rows)
+
+
+def pose_row(time: float, pose: np.ndarray) -> str:
+    x, y, h = pose.tolist()
+    return f"{time:.6f},{x:.4f},{y:.4f},{h:.6f}\n"
+
+
+# -- reading --------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Scans:
+    """Every beam of a scan file as flat arrays, grouped by scan: scan i holds rows
+    start[i]:start[i + 1], taken at time[i]. range is inf where nothing returned."""
+
+    time: np.ndarray  # (S,) s
+    start: np.ndarray  # (S + 1,) row offsets
+    angle: np.ndarray  # (N,) rad
+    range: np.ndarray  # (N,) m
+    settings: dict[str, str] = field(default_factory=dict)
+    path: str = ""
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    def __getitem__(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """Scan i's angles and ranges."""
+        rows = slice(self.start[i], self.start[i + 1])
+        return self.angle[rows], self.range[rows]
+
+    def __iter__(self):
+        """(time, angle, range) a scan."""
+        for i in range(len(self)):
+            yield (float(self.time[i]), *self[i])
+
+
+@dataclass(frozen=True)
+class Truth:
+    """A truth file's rows as arrays: time, id, disc (bool), centre (N, 2), velocity (N, 2),
+    length, width, heading, clear, visible, occluded (bool)."""
+
+    time: np.ndarray
+    id: np.ndarray
+    disc: np.ndarray
+    centre: np.ndarray
+    velocity: np.ndarray
+    length: np.ndarray
+    width: np.ndarray
+    heading: np.ndarray
+    clear: np.ndarray
+    visible: np.ndarray
+    occluded: np.ndarray
+    path: str = ""
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+
+@dataclass(frozen=True)
+class _Table:
+    """A CSV file's cells by column, the file line of each row and the comments' settings."""
+
+    cells: dict[str, list[str]]
+    line: np.ndarray
+    settings: dict[str, str]
+    path: str
+
+    def fail(self, row: int, problem: str) -> OcctrackError:
+        return OcctrackError(problem, self.path, int(self.line[row]))
+
+
+def _lines(path: str, expected: str) -> list[str]:
+    try:
+        with opening(path, expected), open(path, encoding="utf-8", newline="") as fh:
+            return fh.read().splitlines()
+    except UnicodeDecodeError as err:
+        raise OcctrackError(f"not a text file (byte {err.start} is not UTF-8)", path) from None
+
+
+def _settings(comment: str) -> dict[str, str]:
+    return dict(w.split("=", 1) for w in comment.lstrip("#").split() if "=" in w)
+
+
+def _table(path: str, columns: tuple[str, ...], expected: str) -> _Table:
+    """Rows split into cells, each with the right number of columns; comments, blank lines
+    and one line of column names skipped."""
+    settings: dict[str, str] = {}
+    rows, numbers = [], []
+    for number, raw in enumerate(_lines(path, expected), start=1):
+        line = raw.strip().lstrip("\ufeff")
+        if line.startswith("#"):
+            settings.update(_settings(line))
+            continue
+        if not line:
+            continue
+        parts = [p.strip() for p in line.split(",")]
+        if not rows and parts == list(columns):
+            continue
+        if len(parts) != len(columns):
+            raise OcctrackError(f"expected {len(columns)} columns ({', '.join(columns)}), "
+                                f"found {len(parts)}: {line[:60]!r}", path, number)
+        rows.append(parts)
+        numbers.append(number)
+    cells = {name: [r[k] for r in rows] for k, name in enumerate(columns)}
+    return _Table(cells, np.array(numbers, dtype=np.int64), settings, path)
+
+
+def _numbers(table: _Table, name: str) -> np.ndarray:
+    """A column as floats; the first cell that is not a number is an error."""
+    cells = table.cells[name]
+    try:
+        return np.array(cells, dtype=float).reshape(len(cells))
+    except ValueError:
+        for row, text in enumerate(cells):
+            try:
+                float(text)
+            except ValueError:
+                raise table.fail(row, f"{name} is not a number: {text!r}") from None
+        raise  # pragma: no cover - numpy refused what float() reads
+
+
+def _first(table: _Table, bad: np.ndarray, problem) -> None:
+    """An error for the first row flagged in `bad`; `problem(row)` words it."""
+    rows = np.flatnonzero(bad)
+    if len(rows):
+        raise table.fail(rows[0], problem(rows[0]))
+
+
+def _finite(table: _Table, name: str) -> np.ndarray:
+    values = _numbers(table, name)
+    _first(table, ~np.isfinite(values), lambda r: f"{name} is {table.cells[name][r]}; "
+                                                  f"it must be a finite number")
+    return values
+
+
+def _time(table: _Table) -> np.ndarray:
+    t = _finite(table, "time")
+    back = np.r_[False, t[1:] < t[:-1]]
+    _first(table, back, lambda r: f"time {table.cells['time'][r]} is earlier than the row "
+                                  f"before ({table.cells['time'][r - 1]}): rows must be in "
+                                  f"time order")
+    return t
+
+
+def _whole(table: _Table, name: str, low: int) -> np.ndarray:
+    values = _finite(table, name)
+    _first(table, (values != np.round(values)) | (values < low),
+           lambda r: f"{name} {table.cells[name][r]} is not a whole number >= {low}")
+    return values.astype(np.int64)
+
+
+def read_scans(path: str | os.PathLike) -> Scans:
+    """A scan file (see the module docstring), checked row by row."""
+    table = _table(str(path), SCAN_COLUMNS, "a lidar scan file (time,angle,range rows)")
+    time = _time(table)
+    angle = _finite(table, "angle")
+    rng = _numbers(table, "range")
+    _first(table, np.isnan(rng), lambda r: f"range is {table.cells['range'][r]}; write inf "
+                                           f"for a beam with no return")
+    _first(table, rng < 0, lambda r: f"range {table.cells['range'][r]} is negative")
+    new = np.flatnonzero(np.r_[True, time[1:] != time[:-1]]) if len(time) else np.zeros(0, int)
+    return Scans(time[new], np.r_[new, len(time)].astype(np.int64), angle, rng,
+                 table.settings, str(path))
+
+
+def read_truth(path: str | os.PathLike) -> Truth:
+    """A truth file (see the module docstring), checked row by row."""
+    table = _table(str(path), TRUTH_COLUMNS, "a lidar truth file")
+    shape = table.cells["shape"]
+    _first(table, ~np.isin(shape, SHAPES),
+           lambda r: f"shape {shape[r]!r} is not one of {', '.join(SHAPES)}")
+    length, width = _finite(table, "length"), _finite(table, "width")
+    _first(table, (length <= 0) | (width <= 0), lambda r: "length and width must be positive")
+    occluded = _whole(table, "occluded", 0)
+    _first(table, occluded > 1, lambda r: "occluded must be 0 or 1")
+    xy = np.c_[_finite(table, "x"), _finite(table, "y")]
+    v = np.c_[_finite(table, "vx"), _finite(table, "vy")]
+    return Truth(_time(table), _whole(table, "id", 0), np.array(shape) == "disc", xy, v,
+                 length, width, _finite(table, "heading"), _whole(table, "clear_beams", 0),
+                 _whole(table, "visible_beams", 0), occluded.astype(bool), str(path))
+
+
+def read_poses(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """A sensor file: times (S,) and poses (S, 3) x, y, heading."""
+    table = _table(str(path), POSE_COLUMNS, "a lidar sensor pose file")
+    pose = np.c_[_finite(table, "x"), _finite(table, "y"), _finite(table, "heading")]
+    return _time(table), pose.reshape(-1, 3)
+
