@@ -191,6 +191,14 @@ def test_a_miss_blocks_the_beam_object_wise_and_lets_it_through_measurement_wise
     assert np.all(near | far | np.isinf(z))
 
 
+@pytest.mark.parametrize("sensor", ["object-wise", "measurement-wise"])
+def test_an_empty_scene_reports_clutter_only(sensor):
+    config = LidarSceneConfig(people=0, sensor=sensor, clutter_per_scan=3.0)
+    scans = list(simulate_scene(config, 20, seed=0))
+    returns = sum(int(np.isfinite(s.range).sum()) for s in scans)
+    assert all(len(s.objects) == 0 for s in scans) and 0 < returns < 150
+
+
 def test_clutter_returns_come_at_the_configured_rate_and_hide_what_is_behind():
     config = LidarSceneConfig(p_d=1.0, range_noise=0.0, clutter_per_scan=40.0, max_range=20.0)
     rng = np.random.default_rng(2)
@@ -360,6 +368,9 @@ def test_the_command_refuses_bad_settings_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "fov_deg must be a number in (0, 360]" in err
     assert not (tmp_path / "scans.csv").exists()
+    (tmp_path / "a-file").write_text("")
+    assert main(["simulate", "lidar", "-o", str(tmp_path / "a-file"), "--quiet"]) == 1
+    assert "a-file: is a file; give a folder" in capsys.readouterr().err
 
 
 def test_the_command_has_help(capsys):

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from occtrack.config.lidar import LidarSceneConfig
+from occtrack.errors import OcctrackError
 from occtrack.io import scans as fmt
 from occtrack.io.atomic import atomic_write, check_output
 from occtrack.scenarios.lidar.scene import (
@@ -67,6 +68,9 @@ def check_folder(folder: str | Path, overwrite: bool) -> list[Path]:
     """The three outputs in `folder` (made if missing), each refused before any work if it
     exists and not `overwrite`."""
     folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise OcctrackError("is a file; give a folder for scans.csv, truth.csv and sensor.csv",
+                            str(folder))
     folder.mkdir(parents=True, exist_ok=True)
     paths = [folder / name for name in FILES]
     for path in paths:

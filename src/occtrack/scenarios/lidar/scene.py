@@ -38,7 +38,7 @@ from occtrack.scenarios.lidar.world import Crowd, Objects
 class LidarScan:
     """One scan and its truth. time s; pose (x, y, heading) of the sensor in the world;
     angle (B,) rad in the sensor's frame; range (B,) m, inf where nothing returned; objects in
-    the world frame; clear and visible (K,) beams a object (see the module docstring)."""
+    the world frame; clear and visible (K,) beams an object (see the module docstring)."""
 
     time: float
     pose: np.ndarray
@@ -72,7 +72,7 @@ def measure(dist: np.ndarray, config: LidarSceneConfig, rng: np.random.Generator
     b, k = dist.shape
     detected = rng.random((b, k)) < config.p_d
     noisy = np.maximum(dist + config.range_noise * rng.standard_normal((b, k)), 0.0)
-    if config.sensor == "measurement-wise":
+    if config.sensor == "measurement-wise" or k == 0:
         z = np.min(np.where(detected, noisy, np.inf), axis=1, initial=np.inf)
     else:
         first, _ = nearest(dist, np.inf)
