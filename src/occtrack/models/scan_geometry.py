@@ -88,7 +88,8 @@ def disc_ranges(origin: np.ndarray, angles: np.ndarray, centre: np.ndarray,
 def disc_range_gradient(origin: np.ndarray, angles: np.ndarray, centre: np.ndarray,
                         radius: float | np.ndarray) -> np.ndarray:
     """d rho / d c (B, K, 2) where the beam meets the disc in front of the sensor (zeros where
-    it misses, or where the sensor is inside the disc and rho is 0 whatever c does)."""
+    it misses, or where the sensor is inside the disc and rho is 0 whatever c does; a beam
+    exactly tangent, where the slope is infinite, gets just u)."""
     origin, centre = np.asarray(origin, float), np.asarray(centre, float).reshape(-1, 2)
     radius = np.broadcast_to(np.asarray(radius, float), (len(centre),))
     u = directions(angles)
