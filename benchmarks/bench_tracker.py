@@ -2,6 +2,9 @@
 
     python benchmarks/bench_tracker.py [--frames 600] [--memory-frames 10000] [--repeats 3]
 
+Then the same speed on `occtrack demo`'s street (seed 0, 12 people in view, 30 fps, the
+demo's default settings): the figure the demo's steps / s column must match within noise.
+
 Speed: tracked frames (calls of `Tracker.step`) per second for each occlusion model, default
 settings (components and labels grow with the scene), time spent inside `step` only. Wall-clock
 time is what a user waits; CPU time of this process is printed beside it because the machine
@@ -20,6 +23,7 @@ import time
 import tracemalloc
 
 from occtrack.scenarios.pedestrians import Crowd, crowd_scene
+from occtrack.scenarios.street import Street, street_scene
 from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig
 
 
@@ -28,10 +32,10 @@ def frames_of(scene):
     return [(d.box[rows], d.score[rows]) for rows in d.frame_slices(scene.frames)]
 
 
-def speed(frames, occlusion: str, repeats: int) -> tuple[float, float, int]:
+def speed(frames, occlusion: str, repeats: int, **settings) -> tuple[float, float, int]:
     best_wall = best_cpu = float("inf")
     for _ in range(repeats):
-        tracker = Tracker(TrackerConfig(occlusion=occlusion, frame_step=1))
+        tracker = Tracker(TrackerConfig(occlusion=occlusion, frame_step=1, **settings))
         wall = cpu = 0.0
         for boxes, scores in frames:
             w0, c0 = time.perf_counter(), time.process_time()
@@ -71,6 +75,17 @@ def main() -> None:
     print(f"{'occlusion':<18}{'frames/s (wall)':>17}{'frames/s (CPU)':>16}{'components':>12}")
     for name in OCCLUSION_NAMES:
         wall, cpu, n = speed(frames, name, args.repeats)
+        print(f"{name:<18}{wall:>17.0f}{cpu:>16.0f}{n:>12d}")
+
+    street = street_scene(Street(), seed=0)
+    street_frames = frames_of(street)
+    print(f"\nthe demo's street (occtrack demo, seed 0): 12 people in view, "
+          f"{len(street.detections) / street.frames:.1f} detections per frame, "
+          f"{street.frames} frames at 30 fps")
+    print(f"{'occlusion':<18}{'frames/s (wall)':>17}{'frames/s (CPU)':>16}{'components':>12}")
+    for name in OCCLUSION_NAMES:
+        wall, cpu, n = speed(street_frames, name, args.repeats,
+                             image_size=street.image_size, fps=street.fps)
         print(f"{name:<18}{wall:>17.0f}{cpu:>16.0f}{n:>12d}")
 
     if args.memory_frames:

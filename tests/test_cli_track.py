@@ -122,7 +122,8 @@ def test_demo_prints_scores_for_the_three_models(tmp_path, capsys):
     scores = json.loads(capsys.readouterr().out)
     assert set(scores["trackers"]) == {"none", "object-wise", "measurement-wise"}
     for s in scores["trackers"].values():
-        assert 0 < s["idf1"] <= 1 and s["mota"] <= 1 and s["gospa_per_frame"] >= 0
+        assert 0 < s["idf1"] <= 1 and s["mota"] <= 1 and 0 <= s["ece"] <= 1
+        assert 0 <= s["kept"] <= s["occlusions"] and s["false_boxes"] >= 0
     assert 0 < scores["detector"]["recall"] <= 1
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["demo", "--frames", "10", "--figure", str(figure)]) == 1

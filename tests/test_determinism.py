@@ -42,7 +42,7 @@ def differing(a: str, b: str) -> list[int]:
 
 DEMO = ["demo", "--quiet", "--frames", "240", "--people", "8"]
 # the speed's width varies (999 against 1000 steps/s), so the padding before it is masked too
-DEMO_ROW = re.compile(r"^((?:none|object-wise|measurement-wise)(?:\s+\S+){5})\s+\d+$", re.M)
+DEMO_ROW = re.compile(r"^((?:none|object-wise|measurement-wise)(?:\s+\S+){8})\s+\d+$", re.M)
 
 
 def demo(tmp_path: Path, seed: int, name: str, hash_seed: int) -> tuple[str, bytes]:
@@ -65,12 +65,13 @@ def test_demo_repeats_byte_for_byte_by_seed(tmp_path):
     assert other[1] != first[1]  # another scene, another picture
     changed = differing(first[0], other[0])
     lines = first[0].splitlines()
-    # the title names the seed, the detector line and the scores follow the scene; the table
-    # header and the figure's note name neither
-    assert lines[0].startswith("Synthetic street, seed 0") and 0 in changed
-    assert lines[1].startswith("ground truth:") and 1 in changed
-    assert set(changed) - {0, 1} and all(re.match(r"(none|object-wise|measurement-wise) |frame ",
-                                                  lines[i]) for i in changed[2:])
+    # the title names the seed, the detector line, the occlusions and the scores follow the
+    # scene, the figure's note names the occlusion drawn; the table header names neither
+    assert lines[0].startswith("Street, seed 0") and 0 in changed
+    assert lines[1].startswith("detector measured on MOT17:") and 1 in changed
+    assert set(changed) - {0, 1} and all(
+        re.match(r"(none|object-wise|measurement-wise) |full occlusions|person |no full ",
+                 lines[i]) for i in changed[2:])
     header = next(i for i, line in enumerate(lines) if line.startswith("occlusion"))
     assert header not in changed
 
