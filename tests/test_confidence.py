@@ -210,6 +210,32 @@ def test_expansion_is_fitted_exactly_and_is_zero_for_a_shift():
     assert expansion == fit and shift.tolist() == np.median(pairs, axis=0).tolist()
 
 
+def test_camera_estimate_in_one_call_is_the_steps_apart():
+    """`estimate_camera` on a frame small enough for every pair is one compiled call; it gives
+    what the separate steps give, to the bit: `estimate_motion`'s shift and standard error and
+    `estimate_expansion`'s fit (random frames, some with too few pairs; and the large-frame
+    path)."""
+    from occtrack.tracker.camera import estimate_camera, estimate_expansion, estimate_motion
+
+    rng = np.random.default_rng(3)
+    centre = np.array([960.0, 540.0])
+    found = 0
+    for n in (2, 3, 5, 12, 30, 80):
+        previous = np.column_stack([rng.uniform(0, 1800, n), rng.uniform(0, 900, n),
+                                    rng.uniform(20, 60, n), rng.uniform(60, 180, n)])
+        current = previous + np.column_stack([rng.normal(4, 3, (n, 2)), np.zeros((n, 2))])
+        current[rng.random(n) < 0.3, :2] += 300.0  # some boxes that pair with no one
+        got = estimate_camera(previous, current, centre)
+        motion = estimate_motion(previous, current)
+        assert (got is None) == (motion is None)
+        if got is None:
+            continue
+        found += 1
+        assert got[0].tolist() == motion[0].tolist() and got[1].tolist() == motion[1].tolist()
+        assert got[2] == estimate_expansion(previous, current, centre)
+    assert found >= 4
+
+
 def test_a_coasting_box_on_a_camera_walking_forward_is_less_sure():
     """The expansion's drift widens a coasting box's confidence, by (k h (x - centre) t)^2 on
     the centre and (k h s t)^2 on the half-size, growing with time unseen; none at the centre

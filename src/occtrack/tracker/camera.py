@@ -94,14 +94,40 @@ def _shift_and_error(pairs):
 
 
 def estimate_camera(previous: np.ndarray, current: np.ndarray, centre: np.ndarray,
-                    **settings) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None] | None:
+                    height_ratio: float = 1.25, mode_radius: float = 0.05, min_iou: float = 0.5,
+                    min_pairs: int = 3
+                    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None] | None:
     """`estimate_motion` and `estimate_expansion` from one matching: (shift, its standard
-    error, (k, its variance) or None); None when too few boxes pair up."""
-    matched = matched_pairs(previous, current, **settings)
+    error, (k, its variance) or None); None when too few boxes pair up. (A frame small
+    enough for every pair is one compiled call, `_camera_dense`.)"""
+    if len(previous) < min_pairs or len(current) < min_pairs:
+        return None
+    if len(previous) * len(current) <= DENSE_PAIRS:
+        found, shift, error, fitted, k, variance = _camera_dense(
+            np.asarray(previous, dtype=float), np.asarray(current, dtype=float),
+            np.asarray(centre, dtype=float), height_ratio, mode_radius, min_iou, min_pairs)
+        if not found:
+            return None
+        return shift, error, ((k, variance) if fitted else None)
+    matched = matched_pairs(previous, current, height_ratio, mode_radius, min_iou, min_pairs)
     if matched is None:
         return None
     return (*_shift_and_error(matched[0]),
             _expansion(*matched, previous, current, centre))
+
+
+@njit
+def _camera_dense(previous, current, centre, height_ratio, mode_radius, min_iou, min_pairs):
+    """`estimate_camera` over every pair in one call: (found, shift, its standard error,
+    whether k was fitted, k, its variance), the steps of `matched_pairs` (`_estimate_dense`),
+    `_shift_and_error` and `_expansion_fit`."""
+    found, pairs, which = _estimate_dense(previous, current, height_ratio, mode_radius,
+                                          min_iou, min_pairs)
+    if not found:
+        return False, np.zeros(2), np.zeros(2), False, 0.0, 0.0
+    shift, error = _shift_and_error(pairs)
+    fitted, k, variance = _expansion_fit(pairs, which, previous, current, centre)
+    return True, shift, error, fitted, k, variance
 
 
 def estimate_expansion(previous: np.ndarray, current: np.ndarray, centre: np.ndarray,
