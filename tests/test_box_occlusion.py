@@ -97,3 +97,25 @@ def test_models_chosen_by_name():
     assert box_occlusion("object-wise", min_existence=0.3).min_existence == 0.3
     with pytest.raises(ValueError, match="unknown occlusion model 'grid'"):
         box_occlusion("grid")
+
+
+@pytest.mark.parametrize("K,M", [(0, 3), (7, 5), (40, 60), (200, 30)])
+def test_hidden_by_seen_is_the_two_visibility_products(K, M):
+    """Measurement-wise occlusion's q and h in one call are 1 - `visible` of the boxes behind
+    the seen ones and of each seen box behind the others, to the bit: dense and sparse
+    sizes (over DENSE_PAIRS pairs the two products are taken apart)."""
+    rng = np.random.default_rng(K + M)
+
+    def boxes(n):
+        x, y = rng.uniform(0, 600, n), rng.uniform(0, 400, n)
+        w, h = rng.uniform(10, 60, n), rng.uniform(30, 150, n)
+        return np.stack([np.stack([x, x + w], -1), np.stack([y, y + h], -1)], 1)
+
+    g = BoxOcclusionGeometry()
+    b, z = boxes(K), boxes(M)
+    for sparse in (True, False):
+        q, h = g.hidden_by_seen(b, z, sparse=sparse)
+        assert np.array_equal(q, 1.0 - g.visible(b, z, sparse=sparse))
+        assert np.array_equal(h, 1.0 - g.visible(z, z, skip=np.arange(M), sparse=sparse))
+    assert h.shape == (M,) and q.shape == (K,)
+    assert (h > 0).any() or M < 5  # (some seen boxes do hide others)

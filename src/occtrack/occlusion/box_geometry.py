@@ -67,6 +67,30 @@ class BoxOcclusionGeometry:
         return _visible_pairs(hidden, occluders, k, n, w, never, self.gain, self.ramp_zero,
                               self.ramp_one)
 
+    def hidden_by_seen(self, boxes: np.ndarray, z: np.ndarray,
+                       sparse: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(q, h): 1 - `visible(boxes, z)`, how surely the seen boxes z hide each box, and
+        1 - `visible(z, z)` with no box hiding itself, how surely the others hide each z_j
+        (measurement-wise occlusion's two terms); one compiled call where both tables are
+        small enough to take every pair."""
+        boxes, z = np.asarray(boxes, dtype=float), np.asarray(z, dtype=float)
+        K, M = len(boxes), len(z)
+        if not sparse or (K * M <= DENSE_PAIRS and M * M <= DENSE_PAIRS):
+            return _hidden_dense(boxes, z, self.gain, self.ramp_zero, self.ramp_one)
+        return (1.0 - self.visible(boxes, z, sparse=sparse),
+                1.0 - self.visible(z, z, skip=np.arange(M), sparse=sparse))
+
+
+@njit
+def _hidden_dense(boxes, z, gain, ramp_zero, ramp_one):
+    """`hidden_by_seen` over every pair: (1 - prod_n (1 - p[k, n]), the same for z_j over the
+    other seen boxes)."""
+    none = np.zeros(0)
+    q = 1.0 - _visible_dense(boxes, z, none, np.zeros(0, dtype=np.int64), gain, ramp_zero,
+                             ramp_one)
+    h = 1.0 - _visible_dense(z, z, none, np.arange(len(z)), gain, ramp_zero, ramp_one)
+    return q, h
+
 
 @njit
 def _hides(a, b, gain, ramp_zero, ramp_one):

@@ -35,11 +35,9 @@ class MeasurementWise:
         k, z = len(ctx.means), ctx.measurements
         if len(z) == 0:
             return OcclusionTerms(np.ones(k), np.zeros(k), np.zeros(0))
-        hidden = np.zeros(k)
-        if k:
-            boxes = ctx.measurement_model.predicted_edges(ctx.means)
-            hidden = 1.0 - self.geometry.visible(boxes, z, sparse=ctx.gating)
-        return OcclusionTerms(np.ones(k), hidden, self.seen_hidden(z, ctx.gating))
+        boxes = ctx.measurement_model.predicted_edges(ctx.means) if k else np.zeros((0, 2, 2))
+        hidden, seen_hidden = self.geometry.hidden_by_seen(boxes, z, sparse=ctx.gating)
+        return OcclusionTerms(np.ones(k), hidden, seen_hidden)
 
     def seen_hidden(self, z: np.ndarray, sparse: bool = True) -> np.ndarray:
         """h_j: how surely the other visible measurements would have hidden z_j."""
