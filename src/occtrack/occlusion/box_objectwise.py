@@ -16,7 +16,8 @@ import numpy as np
 
 from occtrack.jit import njit
 from occtrack.occlusion.base import OcclusionContext, OcclusionTerms
-from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
+from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, _visible_dense
+from occtrack.spatial import DENSE_PAIRS
 
 
 class ObjectWiseExpectedValue:
@@ -34,11 +35,26 @@ class ObjectWiseExpectedValue:
         if k == 0 or len(occluders) == 0:
             return OcclusionTerms(np.ones(k), np.zeros(k))
         boxes = ctx.measurement_model.predicted_edges(ctx.means)
-        mean_boxes, own = _occluder_boxes(boxes, np.asarray(ctx.weights, dtype=float),
-                                          np.asarray(ctx.owner, dtype=np.int64), occluders)
-        visible = self.geometry.visible(boxes, mean_boxes, weights=r[occluders], skip=own,
-                                        sparse=ctx.gating)
+        weights = np.asarray(ctx.weights, dtype=float)
+        owner = np.asarray(ctx.owner, dtype=np.int64)
+        g = self.geometry
+        if not ctx.gating or k * len(occluders) <= DENSE_PAIRS:  # one compiled call
+            return OcclusionTerms(_visible_behind_means(boxes, weights, owner, occluders, r,
+                                                        g.gain, g.ramp_zero, g.ramp_one),
+                                  np.zeros(k))
+        mean_boxes, own = _occluder_boxes(boxes, weights, owner, occluders)
+        visible = g.visible(boxes, mean_boxes, weights=r[occluders], skip=own, sparse=True)
         return OcclusionTerms(visible, np.zeros(k))
+
+
+@njit
+def _visible_behind_means(boxes, weights, owner, occluders, existence, gain, ramp_zero,
+                          ramp_one):
+    """v_k over every (component, occluder) pair: `_occluder_boxes`, then the product of
+    `box_geometry`'s dense form with the occluders' existences as weights."""
+    mean_boxes, own = _occluder_boxes(boxes, weights, owner, occluders)
+    return _visible_dense(boxes, mean_boxes, existence[occluders], own, gain, ramp_zero,
+                          ramp_one)
 
 
 @njit
