@@ -45,6 +45,7 @@ from occtrack.filters.gmpmb.prediction import (
     _relax_in_place,
     _survive_in_place,
 )
+from occtrack.models.box import _box_clutter
 from occtrack.filters.gmpmb.weights import (
     _all_pairs,
     _association_weights,
@@ -466,8 +467,11 @@ def test_object_misses(seed, n, M):
 def test_new_weights(seed, n, M):
     """_new_weights gives the old L_0j = clutter + Poisson hit weights."""
     rng = np.random.default_rng(seed)
-    args = association_inputs(rng, n, M)[9:13] + (4.0, 640.0 * 480.0, 0.3)
-    equal([_new_weights(*args)], [new_weights_reference(*args)])
+    z, score_term, seen_hidden, poisson_hit = association_inputs(rng, n, M)[9:13]
+    rate, area, o = 4.0, 640.0 * 480.0, 0.3
+    got = _new_weights(_box_clutter(z, score_term, rate, area), seen_hidden, poisson_hit, o)
+    expected = new_weights_reference(z, score_term, seen_hidden, poisson_hit, rate, area, o)
+    equal([got], [expected])
 
 
 @pytest.mark.parametrize("seed,n,M", CASES)
@@ -499,9 +503,9 @@ def test_association_weights(seed, n, M, floor):
     expected = (miss_obj, w_new,
                 *strong_edges_reference(e_row, e_col, L_edge, miss_obj, w_new, floor), hidden)
     slot_hidden = rng.uniform(0, 1, SLOTS)
-    got = _association_weights(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden, z,
-                               score_term, seen_hidden, poisson_hit, rate, area, o, e_row,
-                               e_col, L_edge, floor)
+    got = _association_weights(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden,
+                               _box_clutter(z, score_term, rate, area), seen_hidden,
+                               poisson_hit, o, e_row, e_col, L_edge, floor)
     equal([*got, slot_hidden], expected)
 
 

@@ -70,8 +70,14 @@ class BoxMeasurement:
     H = H_EDGES
 
     def __init__(self, image_size: tuple[float, float], edge_noise: float = 0.069,
-                 border_margin: float = 1.0, aspect: AspectPrior | None = None):
+                 border_margin: float = 1.0, aspect: AspectPrior | None = None,
+                 clutter_rate: float = 5.0, score_floor: float = 0.05,
+                 clutter_score_power: float = 2.0):
         self.image_size = np.asarray(image_size, dtype=float)
+        self.region_size = self.image_size  # the filter's survival region: the image
+        self.clutter_rate = float(clutter_rate)
+        self.score_floor = float(score_floor)
+        self.clutter_score_power = float(clutter_score_power)
         self.edge_noise = float(edge_noise)
         self.border_margin = float(border_margin)
         self.aspect = aspect
@@ -101,6 +107,26 @@ class BoxMeasurement:
         W, H = self.image_size
         return _inside_margin(z, self.border_margin, W - self.border_margin,
                               H - self.border_margin)
+
+    def clutter_density(self, z: np.ndarray, observed: np.ndarray,
+                        scores: np.ndarray) -> np.ndarray:
+        """kappa p_F(z_j) of each detection (M,): clutter_rate / (W H w h) / score^power
+        (`config.TrackerConfig`): a false box falls anywhere in the image with a scale-free
+        size; scores are clipped to [score_floor, 1] first."""
+        W, H = self.image_size
+        # (numpy's power, not libm's: they differ in the last bit)
+        score_term = _clip(scores, self.score_floor, 1.0) ** (-self.clutter_score_power)
+        return _box_clutter(z, score_term, self.clutter_rate, W * H)
+
+    @staticmethod
+    def gate_boxes(z: np.ndarray, observed: np.ndarray) -> np.ndarray:
+        """Each detection's extent (M, 2, 2) for gating against `gates`: its box, an axis
+        with both edges on the border unbounded (no gate on it)."""
+        unmeasured = ~observed.any(axis=2)
+        if unmeasured.any():
+            z = z.copy()
+            z[unmeasured] = [-np.inf, np.inf]
+        return z
 
     def loglik(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                observed: np.ndarray) -> np.ndarray:
@@ -190,6 +216,26 @@ class BoxMeasurement:
         mu, sigma = (0.0, 0.0) if moments is None else moments
         _update_rows(means, covs, rows, z, observed, measurement, self.edge_noise, self._border,
                      moments is not None, mu, sigma)
+
+
+@njit
+def _box_clutter(z, score_term, rate, area):
+    """`BoxMeasurement.clutter_density`: rate / (W H w h) * score_term per detection, W H
+    the image's `area` and score^-power given as `score_term`."""
+    out = np.empty(len(z))
+    for j in range(len(z)):
+        size = max((z[j, 0, 1] - z[j, 0, 0]) * (z[j, 1, 1] - z[j, 1, 0]), 1.0)
+        out[j] = rate / (area * size) * score_term[j]
+    return out
+
+
+@njit
+def _clip(x, low, high):
+    """np.clip(x, low, high) as a new array (numpy's clip costs more than the loop here)."""
+    out = np.empty_like(x)
+    for i in range(len(x)):
+        out[i] = min(max(x[i], low), high)
+    return out
 
 
 @njit

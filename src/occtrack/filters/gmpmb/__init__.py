@@ -93,6 +93,7 @@ import numpy as np
 from occtrack.association import lbp_sparse
 from occtrack.config import TrackerConfig
 from occtrack.filters.gmpmb.children import _child_features, _children, _inherit, _kept_children
+from occtrack.filters.gmpmb.interfaces import BirthModel, MeasurementModel
 from occtrack.filters.gmpmb.labels import (
     _cap_in_place,
     _confirm_in_place,
@@ -137,18 +138,25 @@ NO_CLASSES = np.zeros(0, dtype=np.int64)  # (the kernels' "one class")
 class GaussianMixturePMB:
     """The filter's state and its step. `config` is already validated."""
 
-    def __init__(self, config: TrackerConfig, occlusion: OcclusionModel):
+    def __init__(self, config: TrackerConfig, occlusion: OcclusionModel,
+                 measurement: MeasurementModel | None = None,
+                 births: BirthModel | None = None):
         c = config
         self.config = c
         self.occlusion = occlusion
-        self.measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin,
-                                          AspectPrior() if c.aspect_prior else None)
+        if measurement is None:
+            measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin,
+                                         AspectPrior() if c.aspect_prior else None,
+                                         c.clutter_rate, c.score_floor, c.clutter_score_power)
+        self.measurement = measurement
+        self.birth_model = births  # None: the box births (edges of the image, learnt sizes)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
         self._dt_models: dict[float, tuple] = {}
         self._use_dt(c.dt)
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
-        self.image_size = np.asarray(c.image_size, dtype=float)
+        # the survival region: components whose centre leaves it take exit_survival
+        self.image_size = np.asarray(measurement.region_size, dtype=float)
         cap = c.capacity or INITIAL_POOL
         L = c.max_labels or INITIAL_SLOTS
         self.n = 0
@@ -256,12 +264,13 @@ class GaussianMixturePMB:
         object takes only detections of its own class (None: one class)."""
         self._use_dt(self.config.dt if dt is None else float(dt))
         observed = self.measurement.observed(z)
-        self._learn_sizes(z, observed)
+        if self.birth_model is None:
+            self._learn_sizes(z, observed)
         self.measurement.learn(z, observed)
         if camera is not None:
             self.move_image(*camera)
         self._predict()
-        self._add_births()
+        self._add_births(z, observed)
         self._update(z, observed, scores, classes)
         self.steps += 1
 
@@ -314,12 +323,17 @@ class GaussianMixturePMB:
     def _learn_sizes(self, z: np.ndarray, observed: np.ndarray) -> None:
         _count_sizes(z, observed, self._size_stats)
 
-    def _add_births(self) -> None:
+    def _add_births(self, z=None, observed=None) -> None:
         c = self.config
-        spread = c.spread_birth_rate * self.dt + (c.initial_objects if self.steps == 0 else 0.0)
-        size_mean, size_std = self._size_prior()
-        mass, means, covs = self.births.components(c.edge_birth_rate * self.dt, spread,
-                                                   size_mean, size_std, 2.0 * size_mean[1])
+        if self.birth_model is not None:
+            mass, means, covs = self.birth_model.components(z, observed, self.dt, self.steps)
+        else:
+            spread = c.spread_birth_rate * self.dt + (c.initial_objects if self.steps == 0
+                                                      else 0.0)
+            size_mean, size_std = self._size_prior()
+            mass, means, covs = self.births.components(c.edge_birth_rate * self.dt, spread,
+                                                       size_mean, size_std,
+                                                       2.0 * size_mean[1])
         self._reserve(self.n + len(mass))
         self.n = _append_births(self.n, mass, means, covs, c.birth_detectability,
                                 c.birth_occludability, self.mass, self.mean, self.cov, self.det,
@@ -364,16 +378,14 @@ class GaussianMixturePMB:
             v, seen_hidden, pd, bool(seen_hidden.any()), label, self.slot_class,
             NO_CLASSES if classes is None else classes)
 
-        W, H = self.image_size
-        # (numpy's power, not libm's: they differ in the last bit)
-        score_term = _clipped(scores, c.score_floor, 1.0) ** (-c.clutter_score_power)
+        clutter = self.measurement.clutter_density(z, observed, scores)
         # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
         # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
         # such edges out (gating) splits a crowd's graph into the clusters that really compete
         miss_obj, w_new, strong, s_row, s_col, s_L = _association_weights(
-            rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden, z, score_term,
-            seen_hidden, poisson_hit, c.clutter_rate, W * H, c.occludability, e_row, e_col,
-            L_edge, EDGE_FLOOR if c.gating else 0.0)
+            rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden, clutter,
+            seen_hidden, poisson_hit, c.occludability, e_row, e_col, L_edge,
+            EDGE_FLOOR if c.gating else 0.0)
         marg = lbp_sparse(s_row, s_col, s_L, miss_obj, w_new, tol=c.lbp_tolerance,
                           max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
@@ -432,12 +444,7 @@ class GaussianMixturePMB:
         size = np.diff(np.append(start, n))
         unit_gates = np.stack([np.minimum.reduceat(gates[..., 0], start),
                                np.maximum.reduceat(gates[..., 1], start)], axis=-1)
-        boxes = z
-        unmeasured = ~observed.any(axis=2)  # both edges of an axis on the border: no gate
-        if unmeasured.any():
-            boxes = z.copy()
-            boxes[unmeasured] = [-np.inf, np.inf]
-        ui, uj = overlapping_pairs(unit_gates, boxes)
+        ui, uj = overlapping_pairs(unit_gates, self.measurement.gate_boxes(z, observed))
         count = size[ui]
         total = int(count.sum())
         cand_of_pair = np.repeat(np.arange(len(ui)), count)

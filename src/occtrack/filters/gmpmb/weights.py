@@ -160,13 +160,14 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, A, M, ma
 
 
 @njit
-def _association_weights(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden, z,
-                         score_term, seen_hidden, poisson_hit, rate, area, occludability,
-                         e_row, e_col, L_edge, floor):
+def _association_weights(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden, clutter,
+                         seen_hidden, poisson_hit, occludability, e_row, e_col, L_edge, floor):
     """`_object_misses`, `_new_weights` and `_strong_edges` in one call: (miss_i, L_0j, and
-    the strong edges: mask, rows, columns, L_ij)."""
+    the strong edges: mask, rows, columns, L_ij). `clutter` is kappa p_F(z_j) of each
+    measurement, from the measurement model (`BoxMeasurement.clutter_density`
+    for boxes)."""
     miss_obj = _object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden)
-    w_new = _new_weights(z, score_term, seen_hidden, poisson_hit, rate, area, occludability)
+    w_new = _new_weights(clutter, seen_hidden, poisson_hit, occludability)
     strong, s_row, s_col, s_L = _strong_edges(e_row, e_col, L_edge, miss_obj, w_new, floor)
     return miss_obj, w_new, strong, s_row, s_col, s_L
 
@@ -190,15 +191,12 @@ def _object_misses(rows, A, mass, miss, det, occ, v, q, slots, slot_hidden):
 
 
 @njit
-def _new_weights(z, score_term, seen_hidden, poisson_hit, rate, area, occludability):
-    """L_0j = kappa p_F(z_j) (1 - o h_j) + the Poisson part's hit weights, with kappa p_F =
-    rate / (W H w h) / score^power (`config.TrackerConfig`), W H the image's `area` and
-    score^-power given as `score_term`."""
-    w_new = np.empty(len(z))
-    for j in range(len(z)):
-        size = max((z[j, 0, 1] - z[j, 0, 0]) * (z[j, 1, 1] - z[j, 1, 0]), 1.0)
-        w_new[j] = (rate / (area * size) * score_term[j]
-                    * (1.0 - occludability * seen_hidden[j]) + poisson_hit[j])
+def _new_weights(clutter, seen_hidden, poisson_hit, occludability):
+    """L_0j = kappa p_F(z_j) (1 - o h_j) + the Poisson part's hit weights, kappa p_F(z_j)
+    given as `clutter` (the measurement model's clutter density)."""
+    w_new = np.empty(len(clutter))
+    for j in range(len(clutter)):
+        w_new[j] = clutter[j] * (1.0 - occludability * seen_hidden[j]) + poisson_hit[j]
     return w_new
 
 
