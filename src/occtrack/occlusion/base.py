@@ -53,11 +53,19 @@ class OcclusionTerms:
     occludable measurement where z_j is would have been hidden by the other visible
     measurements (measurement-wise occlusion). z_j was seen, so its source was either not
     occludable or escaped: with occludability o_k the hit term carries 1 - o_k h_j. None means
-    0 (a measurement is never hidden by the others, or occlusion is object-wise)."""
+    0 (a measurement is never hidden by the others, or occlusion is object-wise).
+
+    hidden_centre (K, 2) and hidden_variance (K, 2), optional: the mean and per-axis variance
+    of each component's centre given that its measurement was hidden (the moments of
+    p(x) q(x) / q_k, in the filter's frame). Given, a missed component's density takes the
+    miss branch too: the hidden part of its miss moves it there (`occtrack.filters.gmpmb`).
+    None: the miss child keeps its parent's density (q read at one point)."""
 
     visible: np.ndarray
     hidden: np.ndarray
     seen_hidden: np.ndarray | None = None
+    hidden_centre: np.ndarray | None = None
+    hidden_variance: np.ndarray | None = None
 
 
 class OcclusionModel(Protocol):

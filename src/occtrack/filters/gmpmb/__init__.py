@@ -92,7 +92,13 @@ import numpy as np
 
 from occtrack.association import lbp_sparse
 from occtrack.config import TrackerConfig
-from occtrack.filters.gmpmb.children import _child_features, _children, _inherit, _kept_children
+from occtrack.filters.gmpmb.children import (
+    _child_features,
+    _children,
+    _inherit,
+    _kept_children,
+    _miss_branch_moments,
+)
 from occtrack.filters.gmpmb.interfaces import BirthModel, MeasurementModel
 from occtrack.filters.gmpmb.labels import (
     _cap_in_place,
@@ -398,6 +404,9 @@ class GaussianMixturePMB:
             children, self._select(children) if c.capacity else None, c.prune_mass, n, pk, pj,
             M, label, c.max_components_per_object, len(self.slot_used))
         new_mean, new_cov, new_label, h, newborn = _inherit(mean, cov, label, parent, j)
+        if terms.hidden_centre is not None:  # the density takes the miss branch too
+            _miss_branch_moments(new_mean, new_cov, parent, j, det, occ, v, q, miss,
+                                 terms.hidden_centre, terms.hidden_variance)
         new_det, new_occ, new_coast = _child_features(
             parent, j, det, occ, self.occ[:n], established, v, q, miss, seen_hidden, coast,
             self.dt)

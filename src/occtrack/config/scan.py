@@ -1,0 +1,138 @@
+"""Settings of the lidar scan tracker (`occtrack.tracker.scan.ScanTracker`): the one
+Gaussian-mixture PMB filter of the box tracker, fed whole 2-D scans (issue 24, item 2).
+
+Lengths are in metres and times in seconds, in the world frame of the scans. The filter itself
+keeps its own settings (`TrackerConfig`, lengths in units of an object's size, "h"); a scan
+tracker's object is a disc of radius `radius`, so h is its diameter and `filter_config`
+converts. The filter's frame is centimetres with the origin at the corner of the square
+[-max_range, max_range]^2 about the sensor: the disc's half-size (25 cm) is then far above the
+box tracker's smallest box (4 px, `occtrack.models.box.MIN_HEIGHT`), which would otherwise set
+the unit of the motion noises.
+
+Every number has a range (`SCAN_RANGES`), checked like the other tables of the schema, and a
+TOML [scan] table (`from_dict`) goes through the same `build`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from occtrack.config import TrackerConfig, build, check_ranges
+
+SCAN_OCCLUSION_NAMES = ("none", "measurement-wise")
+CENTIMETRES = 100.0  # filter units a metre
+
+SCAN_RANGES = {
+    "p_d": "[0, 1]", "range_noise": "(0, 100]", "clutter_per_scan": "(0, 100000]",
+    "max_range": "(0, 100000]", "radius": "(0, 100]", "segment_jump": "(0, 1000]",
+    "segment_gap": "[0, 1000]", "min_birth_beams": "[1, 100000]",
+    "detectability": "[0, 1]", "occludability": "[0, 1]", "birth_occludability": "[0, 1]",
+    "position_noise": "[0, 1000]", "velocity_noise": "[0, 1000]",
+    "velocity_time": "(0, inf]", "coast_velocity_time": "(0, inf]", "death_rate": "[0, 1000]",
+    "birth_mass": "(0, 1]", "edge_birth_mass": "(0, 1]", "initial_birth_mass": "(0, 1]",
+    "edge_width": "[0, 100000]", "birth_position_std": "(0, 1000]",
+    "birth_speed_std": "(0, 1000]", "report_existence": "[0, 1]", "confirm_hits": "[1, 1000]",
+    "confirm_window": "[1, 1000]", "gate_sigmas": "(0, 1000]",
+}
+
+
+@dataclass(frozen=True)
+class ScanTrackerConfig:
+    """Every setting of the scan tracker.
+
+    Sensor (section V's beam model, `occtrack.models.beam.BeamModel`): a surface on a beam
+    returns with probability `p_d` at its range plus N(0, range_noise^2); `clutter_per_scan`
+    spurious returns a scan, uniform over the beams and over [0, max_range]; the nearest return
+    is reported, none before `max_range`.
+
+    Objects: discs of `radius` m. Segments: a scan's returns are cut into runs of neighbouring
+    beams whose ranges differ by less than `segment_jump` m (plus 4 range_noise), skipping at
+    most `segment_gap` beams without a return; each is one measurement of at most one object.
+
+    Filter: the segment-level P_D (`detectability`, a Markov feature as in the box tracker),
+    `occludability` (the stationary probability that an object can be hidden, learnt per
+    object; `birth_occludability` at birth), constant velocity with `position_noise` m / sqrt(s)
+    and `velocity_noise` m / s / sqrt(s), velocities relaxing with `velocity_time` (and with
+    `coast_velocity_time` while unseen), deaths at `death_rate` a second. Births: a segment of
+    at least `min_birth_beams` beams adds a Poisson component at the disc its returns fit,
+    `birth_position_std` m and `birth_speed_std` m/s about it, of mass `birth_mass` a scan
+    (`edge_birth_mass` within `edge_width` m of max_range, where people walk in;
+    `initial_birth_mass` at the first scan). A Bernoulli is confirmed after `confirm_hits`
+    segments in its first `confirm_window` scans, else deleted; reported while its existence
+    exceeds `report_existence`. `gate_sigmas`: a segment is looked at for a component only if
+    it lies within the disc widened by this many position standard deviations.
+    """
+
+    occlusion: str = "measurement-wise"
+    p_d: float = 0.98
+    range_noise: float = 0.02
+    clutter_per_scan: float = 5.0
+    max_range: float = 20.0
+    radius: float = 0.25
+    segment_jump: float = 0.3
+    segment_gap: int = 1
+    min_birth_beams: int = 2
+    detectability: float = 0.95
+    occludability: float = 0.98
+    birth_occludability: float = 0.5
+    position_noise: float = 0.05
+    velocity_noise: float = 0.3
+    velocity_time: float = math.inf
+    coast_velocity_time: float = math.inf
+    death_rate: float = 0.05
+    birth_mass: float = 0.01
+    edge_birth_mass: float = 0.1
+    initial_birth_mass: float = 0.5
+    edge_width: float = 3.0
+    birth_position_std: float = 0.1
+    birth_speed_std: float = 1.0
+    report_existence: float = 0.5
+    confirm_hits: int = 3
+    confirm_window: int = 5
+    gate_sigmas: float = 5.0
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        """ValueError naming the first setting out of range or at odds with another."""
+        if self.occlusion not in SCAN_OCCLUSION_NAMES:
+            raise ValueError(f"occlusion must be one of {', '.join(SCAN_OCCLUSION_NAMES)}, "
+                             f"not {self.occlusion!r}")
+        check_ranges(self, SCAN_RANGES)
+        if self.confirm_hits > self.confirm_window:
+            raise ValueError(f"confirm_hits must be between 1 and confirm_window "
+                             f"({self.confirm_window}), not {self.confirm_hits}")
+
+    def replace(self, **changes) -> ScanTrackerConfig:
+        return dataclasses.replace(self, **changes)
+
+    @classmethod
+    def from_dict(cls, values: dict, source: str = "configuration") -> ScanTrackerConfig:
+        """From plain values (a TOML [scan] table), checking names, types and ranges."""
+        return build(cls, values, source, "scan")
+
+    @property
+    def unit(self) -> float:
+        """The filter's unit of length h in metres: the disc's diameter."""
+        return 2.0 * self.radius
+
+    def filter_config(self, rate: float = 10.0) -> TrackerConfig:
+        """The filter's settings: this table's, in units of the disc's diameter (h) and
+        the filter frame (`occtrack.models.scan_segments`: cm, the square about the sensor)."""
+        h = self.unit
+        side = 2.0 * self.max_range * CENTIMETRES
+        return TrackerConfig(
+            occlusion=self.occlusion, image_size=(side, side), fps=rate,
+            camera_motion="none", edge_noise=self.range_noise / h,
+            position_noise=self.position_noise / h, velocity_noise=self.velocity_noise / h,
+            size_noise=0.0, velocity_time=self.velocity_time,
+            coast_velocity_time=self.coast_velocity_time, death_rate=self.death_rate,
+            exit_survival=0.1, detectability=self.detectability,
+            occludability=self.occludability, birth_detectability=self.detectability,
+            birth_occludability=self.birth_occludability, confirm_hits=self.confirm_hits,
+            confirm_window=self.confirm_window, report_existence=self.report_existence,
+            report_min_confidence=0.0, gate_sigmas=self.gate_sigmas,
+            birth_speed_std=self.birth_speed_std / h, inward_speed=0.0)
