@@ -78,3 +78,37 @@ def test_a_toy_measurement_model_drives_the_filter():
     assert r[best] > 0.9
     assert np.linalg.norm(means[best, :, 0] - truth) < 3 * NOISE  # about the last point
     assert (r > 0.5).sum() == 1  # the clutter started no confirmed object
+
+
+def test_the_miss_branch_moves_a_hidden_density_and_its_velocity_with_it():
+    """A missed component's density moment-matched to p(x) (1 - d + d o v q(x)) / miss:
+    the hidden share s = d o v q / miss of it moves to the hidden moments, the velocity by
+    its regression on the centre; against the moments of the two-part mixture, by hand."""
+    from occtrack.filters.gmpmb.children import _miss_branch_moments
+
+    mean = np.array([[[1.0, 2.0, 0.5], [3.0, 0.0, 0.5]]])
+    cov = np.zeros((1, 2, 3, 3))
+    for axis in range(2):
+        cov[0, axis] = [[4.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 0.01]]
+    det, occ, v, q = np.array([0.9]), np.array([1.0]), np.array([1.0]), np.array([0.5])
+    miss = 1 - det + det * occ * v * q
+    centre, variance = np.array([[0.0, 3.0]]), np.array([[1.0, 4.0]])
+    m, P = mean.copy(), cov.copy()
+    _miss_branch_moments(m, P, np.array([0]), np.array([-1]), det, occ, v, q, miss, centre,
+                         variance)
+    s = (det * occ * v * q / miss)[0]
+    # axis 0: hidden part N(x; 0, 1) for the centre, velocity by regression (gain 1/4)
+    gain = cov[0, 0, :, 0] / 4.0
+    hidden_mean = mean[0, 0] + gain * (0.0 - 1.0)
+    hidden_cov = cov[0, 0] + np.outer(gain, gain) * (1.0 - 4.0)
+    mix = (1 - s) * mean[0, 0] + s * hidden_mean
+    mix_cov = ((1 - s) * (cov[0, 0] + np.outer(mean[0, 0] - mix, mean[0, 0] - mix))
+               + s * (hidden_cov + np.outer(hidden_mean - mix, hidden_mean - mix)))
+    assert np.allclose(m[0, 0], mix) and np.allclose(P[0, 0], mix_cov)
+    # axis 1: the centre was already where the hidden part is and as wide: nothing moves
+    assert np.allclose(m[0, 1], mean[0, 1]) and np.allclose(P[0, 1], cov[0, 1])
+    # a hit child (j >= 0) is left alone
+    m2, P2 = mean.copy(), cov.copy()
+    _miss_branch_moments(m2, P2, np.array([0]), np.array([0]), det, occ, v, q, miss, centre,
+                         variance)
+    assert np.array_equal(m2, mean) and np.array_equal(P2, cov)

@@ -45,7 +45,6 @@ from occtrack.filters.gmpmb.prediction import (
     _relax_in_place,
     _survive_in_place,
 )
-from occtrack.models.box import _box_clutter
 from occtrack.filters.gmpmb.weights import (
     _all_pairs,
     _association_weights,
@@ -59,6 +58,7 @@ from occtrack.filters.gmpmb.weights import (
 )
 from occtrack.models.box import (
     _beyond_scores,
+    _box_clutter,
     _censored,
     _edges,
     _edges_of_boxes,

@@ -22,8 +22,9 @@ object is; linearised there, an update would drag a track sideways.
 The (component, segment) likelihood, against clutter on every beam (the units of
 `models.scan`: the ratio Lambda of each beam to clutter alone):
 
-    log p(z_j | x_k) = n_j log(P_D / kappa) + log N(z_j; rho(c_j) + H (m_k - c_j), H P_k H' + sigma^2 I)
-                       + sum over the other beams b that reach the disc at m_k of log m_b,
+    log p(z_j | x_k) = n_j log(P_D / kappa)
+                       + log N(z_j; rho(c_j) + H (m_k - c_j), H P_k H' + sigma^2 I)
+                       + sum over the other beams b that may reach the disc of log m_b,
 
 - the hit beams: the fit beams of the segment, their ranges jointly Gaussian given the
   component's centre N(m_k, P_k): with P_k = 0 and m_k = c_j it is sum log g_b, g_b =

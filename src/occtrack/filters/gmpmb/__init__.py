@@ -75,6 +75,17 @@ says; leaving such edges out splits a crowd's graph into the clusters that reall
 `gating = false` computes every pair and keeps every edge, to check that nothing moves
 (benchmarks/bench_gating.py: no MOT17 metric moves).
 
+One filter, several measurement models (DESIGN section 3; `interfaces`): the measurement
+model gives p(z_j | x_k) on the gated pairs, the clutter density kappa p_F(z_j), the gates,
+the update and the survival region; the birth model the Poisson part's new components. The
+defaults are the box tracker's (`BoxMeasurement`, the image-edge births with the learnt size
+prior); the lidar scan tracker passes `models.scan_segments`' (segments of a scan). An
+occlusion model may also give the moments of each component's centre given that its
+measurement was hidden (`OcclusionTerms.hidden_centre`): the miss child's density is then
+moment-matched to p(x) (1 - d + d o v q(x)) / miss (`children._miss_branch_moments`), the
+negative information of section V moving the density as well as the existence; the box
+models give none, and the miss child keeps its parent's density.
+
 Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
 pluggable miss term. The loops over components, pairs and cells and the bookkeeping between
 them (the `_`-prefixed functions of this package's modules: `labels`, `pool`, `prediction`,
