@@ -236,3 +236,25 @@ def test_update_refuses_bad_scans():
     tr.update(np.full(BEAMS, np.inf), ANGLES, 0.0)
     with pytest.raises(ValueError, match="not after"):
         tr.update(np.full(BEAMS, np.inf), ANGLES, 0.0)
+
+
+def test_compiled_hidden_probability_matches_the_array_form():
+    """occlusion.scan._hidden_at against the same product written with
+    ScanMeasurement.component_beams and scipy's Phi, on random discs in a scan of three."""
+    from occtrack.occlusion.scan import _hidden_at
+
+    model = ScanMeasurement(MODEL, RADIUS)
+    rng = np.random.default_rng(11)
+    z = model.segments(ANGLES, scan_of([[1.0, 0.3], [-2.0, 1.0], [0.5, -3.0]], rng, 0.98,
+                                       0.02))
+    centre = rng.uniform(-5, 5, (300, 2))
+    centre[:100] = [1.0, 0.3] + rng.normal(0, 1.0, (100, 2)) * [[3.0, 1.0]]
+    k, b, rho, _, reach = model.component_beams(centre, np.zeros((300, 2, 2)), z)
+    at = np.where(np.isfinite(z.range[b]), z.range[b], MODEL.max_range)
+    with np.errstate(divide="ignore"):
+        log_q = np.log1p(-reach * ndtr((at - rho) / MODEL.sigma))
+    total = np.bincount(k, weights=log_q, minlength=300)
+    expected = np.where(np.bincount(k, minlength=300) > 0, np.exp(total), 0.0)
+    got = _hidden_at(centre, z.origin, z.angle, z.range, MODEL.max_range, MODEL.sigma, RADIUS)
+    assert np.allclose(got, expected, rtol=1e-9, atol=1e-12)
+    assert (got > 0.5).sum() >= 5 and (got < 1e-6).sum() >= 50  # both kinds present
