@@ -64,16 +64,18 @@ object sizes, a smallest size of 4 px) serve unchanged; `to_world` / `to_filter`
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import ndtr
 
+from occtrack.jit import njit
 from occtrack.models.beam import BeamModel
-from occtrack.models.scan import beam_terms
 
 ITERATIONS = 3  # iterated EKF: linearisations a (component, segment) pair
-MAX_SLOPE = 5.0  # fit beams: |d rho / d c| across the beam at most this
+MAX_SLOPE = 5.0  # hit beams: |d rho / d c| across the beam at most this
+SPREAD = 6.0  # beams looked at: the disc's span widened by this many centre deviations
 LOG_2PI = float(np.log(2 * np.pi))
 RADIUS_VAR = 1e-6  # (filter units^2) a disc's radius is known; a small variance keeps P regular
 
@@ -269,12 +271,13 @@ class ScanMeasurement:
         beam's signed distance d ~ N(n.(c - o), n' P n) from the centre (1 or 0 for a known
         centre); rho and H at the mean, on a beam that misses the mean disc at its closest
         approach. The beams looked at are those within the disc's angular half-width widened
-        by 6 lateral standard deviations."""
+        by SPREAD centre standard deviations. (The array form of what `raw_loglik` and the
+        scan occlusion compute in compiled loops.)"""
         origin = z.origin
         p = centre - origin
         dist = np.hypot(p[:, 0], p[:, 1])
         bearing = np.arctan2(p[:, 1], p[:, 0])
-        spread = 6.0 * np.sqrt(np.maximum(cov[:, 0, 0], cov[:, 1, 1]))
+        spread = SPREAD * np.sqrt(np.maximum(cov[:, 0, 0], cov[:, 1, 1]))
         half = np.arcsin(np.clip((self.radius + spread) / np.maximum(dist, 1e-9), 0.0, 1.0))
         half = np.where(dist - self.radius < self.beam.max_range, half, -1.0)
         k, b = beams_in_arcs(z.angle, bearing - half - 1e-9, bearing + half + 1e-9)
@@ -312,24 +315,8 @@ class ScanMeasurement:
         """The fit statistics (A = H'H, Hr = H'e, rr = e'e, n) of segment j[e]'s beams for a
         disc at `at[e]` (P, 2): the beams that meet it at a slope <= MAX_SLOPE, their ranges
         linearised there (rho(c) ~ rho(at) + H (c - at), e = z - rho(at))."""
-        count = z.size[j]
-        pair = np.repeat(np.arange(len(j)), count)
-        first = np.repeat(z.start[j] - (np.cumsum(count) - count), count)
-        beam = z.beam[first + np.arange(int(count.sum()))]
-        u = np.c_[np.cos(z.angle[beam]), np.sin(z.angle[beam])]
-        rho, H, ok = _disc_hits(z.origin, u, at[pair], self.radius)
-        e = np.where(ok, z.range[beam] - rho, 0.0)
-        H = np.where(ok[:, None], H, 0.0)
-        P = len(j)
-        n = np.bincount(pair, weights=ok.astype(float), minlength=P)
-        A = np.zeros((P, 2, 2))
-        for a in range(2):
-            for b in range(2):
-                A[:, a, b] = np.bincount(pair, weights=H[:, a] * H[:, b], minlength=P)
-        Hr = np.stack([np.bincount(pair, weights=H[:, a] * e, minlength=P) for a in range(2)],
-                      axis=1)
-        rr = np.bincount(pair, weights=e * e, minlength=P)
-        return A, Hr, rr, n
+        return _linearise(np.asarray(at, float), np.asarray(j, np.int64), z.start, z.beam,
+                          z.angle, z.range, z.origin, self.radius, MAX_SLOPE)
 
     def pair_fit(self, centre: np.ndarray, cov: np.ndarray, z: Segments, j: np.ndarray):
         """Per pair (component centre (P, 2), covariance (P, 2, 2), segment j (P,)): the
@@ -355,12 +342,11 @@ class ScanMeasurement:
         _, stats, log_hit, post, post_cov = self.pair_fit(centre[k], cov[k], z, j)
         log_hit = log_hit + stats[3] * np.log(model.p_d / model.kappa)
         # the component's other beams, where the hit beams put it: each pair's posterior disc
-        pair, cb, rho, var, reach = self.component_beams(post, post_cov, z)
-        m, _ = beam_terms(z.range[cb], rho[:, None], model, var[:, None])
-        with np.errstate(divide="ignore"):
-            log_m = np.log(1.0 - reach * (1.0 - m[:, 0]))
-        other = z.segment_of_beam[cb] != j[pair]
-        return log_hit + np.bincount(pair[other], weights=log_m[other], minlength=len(k))
+        # (`component_beams` and `beam_terms` in one compiled loop)
+        other = _other_beams(post, post_cov, np.asarray(j, np.int64), z.origin, z.angle,
+                             z.range, z.segment_of_beam, self.radius, model.max_range,
+                             model.p_d, model.sigma, SPREAD)
+        return log_hit + other
 
     def clutter_density(self, z: Segments, observed: np.ndarray,
                         scores: np.ndarray) -> np.ndarray:
@@ -500,3 +486,100 @@ class ScanBirths:
             covs[:, axis, 1, 1] = (self.speed_std * model.unit) ** 2
             covs[:, axis, 2, 2] = RADIUS_VAR
         return mass, means, covs
+
+
+@njit
+def _phi(x):
+    return 0.5 * math.erfc(-x / math.sqrt(2.0))
+
+
+@njit
+def _linearise(at, j, start, beam, angle, ranges, origin, radius, max_slope):
+    """`ScanMeasurement.linearise`, compiled: per pair, the beams of segment j[p] that meet
+    the disc at at[p] at a slope <= max_slope (`_disc_hits`), summed into A, Hr, rr, n."""
+    P = len(j)
+    A, Hr, rr, n = np.zeros((P, 2, 2)), np.zeros((P, 2)), np.zeros(P), np.zeros(P)
+    for p in range(P):
+        px, py = at[p, 0] - origin[0], at[p, 1] - origin[1]
+        for i in range(start[j[p]], start[j[p] + 1]):
+            b = beam[i]
+            ux, uy = math.cos(angle[b]), math.sin(angle[b])
+            t_c = ux * px + uy * py
+            d = -uy * px + ux * py
+            half2 = radius * radius - d * d
+            if half2 <= 0.0:
+                continue
+            half = math.sqrt(half2)
+            rho = t_c - half
+            slope = d / half
+            if rho <= 0.0 or abs(slope) > max_slope:
+                continue
+            hx, hy = ux - slope * uy, uy + slope * ux
+            e = ranges[b] - rho
+            A[p, 0, 0] += hx * hx
+            A[p, 0, 1] += hx * hy
+            A[p, 1, 0] += hy * hx
+            A[p, 1, 1] += hy * hy
+            Hr[p, 0] += hx * e
+            Hr[p, 1] += hy * e
+            rr[p] += e * e
+            n[p] += 1.0
+    return A, Hr, rr, n
+
+
+@njit
+def _other_beams(centre, cov, j, origin, angle, ranges, segment_of_beam, radius, max_range,
+                 p_d, sigma, spread):
+    """Per pair, sum over the beams that may reach the disc (centre[p], covariance cov[p])
+    and are not segment j[p]'s of log(1 - reach (1 - m)), m = 1 - P_D Phi((z - rho) / s),
+    s^2 = sigma^2 + H P H', reach = P(|d| < a) (`ScanMeasurement.component_beams` and
+    `models.scan.beam_terms`, compiled)."""
+    P, B = len(j), len(angle)
+    out = np.zeros(P)
+    turn = 2.0 * math.pi
+    for p in range(P):
+        px, py = centre[p, 0] - origin[0], centre[p, 1] - origin[1]
+        dist = math.hypot(px, py)
+        if dist - radius >= max_range or B == 0:
+            continue
+        c00, c01, c10, c11 = cov[p, 0, 0], cov[p, 0, 1], cov[p, 1, 0], cov[p, 1, 1]
+        widen = spread * math.sqrt(max(c00, c11))
+        half = math.asin(min(max((radius + widen) / max(dist, 1e-9), 0.0), 1.0))
+        bearing = math.atan2(py, px)
+        low = bearing - half - 1e-9
+        base = math.floor((low - angle[0]) / turn) * turn
+        total = 0.0
+        for shift in (0.0, turn):
+            lo = np.searchsorted(angle, low - base + shift - turn)
+            hi = np.searchsorted(angle, bearing + half + 1e-9 - base + shift - turn,
+                                 side="right")
+            for b in range(lo, hi):
+                if segment_of_beam[b] == j[p]:
+                    continue
+                ux, uy = math.cos(angle[b]), math.sin(angle[b])
+                t_c = ux * px + uy * py
+                if t_c <= 0.0:
+                    continue
+                nx, ny = -uy, ux
+                d = nx * px + ny * py
+                chord = math.sqrt(max(radius * radius - d * d, 0.0))
+                rho = t_c - chord
+                if rho <= 0.0:
+                    continue
+                lateral2 = nx * nx * c00 + nx * ny * (c01 + c10) + ny * ny * c11
+                if lateral2 > 0.0:
+                    lateral = math.sqrt(lateral2)
+                    reach = _phi((radius - d) / lateral) - _phi((-radius - d) / lateral)
+                else:
+                    reach = 1.0 if abs(d) < radius else 0.0
+                if reach <= 1e-12:
+                    continue
+                slope = d / chord if chord > 0.0 else 0.0
+                hx, hy = ux + slope * nx, uy + slope * ny
+                var = hx * hx * c00 + hx * hy * (c01 + c10) + hy * hy * c11
+                s = math.sqrt(sigma * sigma + var)
+                zb = ranges[b] if ranges[b] < max_range else max_range
+                m = 1.0 - p_d * _phi((zb - rho) / s)
+                total += math.log(1.0 - reach * (1.0 - m))
+        out[p] = total
+    return out

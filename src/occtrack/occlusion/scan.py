@@ -27,7 +27,6 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from scipy.special import ndtr
 
 from occtrack.jit import njit
 from occtrack.occlusion.base import NoOcclusion, OcclusionContext, OcclusionModel, OcclusionTerms
