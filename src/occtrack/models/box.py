@@ -219,26 +219,6 @@ class BoxMeasurement:
 
 
 @njit
-def _box_clutter(z, score_term, rate, area):
-    """`BoxMeasurement.clutter_density`: rate / (W H w h) * score_term per detection, W H
-    the image's `area` and score^-power given as `score_term`."""
-    out = np.empty(len(z))
-    for j in range(len(z)):
-        size = max((z[j, 0, 1] - z[j, 0, 0]) * (z[j, 1, 1] - z[j, 1, 0]), 1.0)
-        out[j] = rate / (area * size) * score_term[j]
-    return out
-
-
-@njit
-def _clip(x, low, high):
-    """np.clip(x, low, high) as a new array (numpy's clip costs more than the loop here)."""
-    out = np.empty_like(x)
-    for i in range(len(x)):
-        out[i] = min(max(x[i], low), high)
-    return out
-
-
-@njit
 def _loglik_pairs(zhat, S, z, observed, k, j, log_phi, log_peak):
     """log N of the measured edges of z_j under component k, per pair, plus the log
     probability log_phi[k, c] + log_peak[k] of each edge on the border, c the edge's column
@@ -474,3 +454,23 @@ def _beyond_update(means, covs, rows, observed, measurement, edge_noise, border)
                 for a in range(3):
                     for b in range(3):
                         P[a, b] -= u[a] * u[b] * shrink
+
+
+@njit
+def _box_clutter(z, score_term, rate, area):
+    """`BoxMeasurement.clutter_density`: rate / (W H w h) * score_term per detection, W H
+    the image's `area` and score^-power given as `score_term`."""
+    out = np.empty(len(z))
+    for j in range(len(z)):
+        size = max((z[j, 0, 1] - z[j, 0, 0]) * (z[j, 1, 1] - z[j, 1, 0]), 1.0)
+        out[j] = rate / (area * size) * score_term[j]
+    return out
+
+
+@njit
+def _clip(x, low, high):
+    """np.clip(x, low, high) as a new array (numpy's clip costs more than the loop here)."""
+    out = np.empty_like(x)
+    for i in range(len(x)):
+        out[i] = min(max(x[i], low), high)
+    return out
