@@ -6,13 +6,14 @@ import argparse
 import importlib
 
 NAME = "reproduce"
-HELP = "rerun one of the paper's tables (ours beside the paper's values)"
+HELP = "rerun one of the paper's tables (ours beside the paper's values), or the lidar study"
 DESCRIPTION = HELP + ". Each table has its own options: occtrack reproduce TABLE --help."
 
 EXPERIMENTS = (
     "table1",
     "table2",
     "table3",
+    "lidar",
 )
 
 

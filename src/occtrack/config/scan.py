@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from occtrack.config import TrackerConfig, build, check_ranges
 
 SCAN_OCCLUSION_NAMES = ("none", "measurement-wise")
+SCAN_LIKELIHOOD_NAMES = ("derived", "hand-made", "cluster")
 CENTIMETRES = 100.0  # filter units a metre
 
 SCAN_RANGES = {
@@ -63,9 +64,18 @@ class ScanTrackerConfig:
     segments in its first `confirm_window` scans, else deleted; reported while its existence
     exceeds `report_existence`. `gate_sigmas`: a segment is looked at for a component only if
     it lies within the disc widened by this many position standard deviations.
+
+    Likelihood (issue 24's baselines): "derived", a segment scored by `models.scan_segments`
+    (its beams jointly, and section V's closed-form term on the object's other beams);
+    "hand-made", the same with the other beams' term replaced by the fixed shape of Thrun et
+    al. (`models.scan_hand_made`: beyond: low, closer: uniform); "cluster", cluster-then-track:
+    each segment reduced to the centre of the disc it fits and tracked as a point
+    (`models.point`), N(z; centre, P + cluster_noise^2 I). A cluster carries no beams, so
+    "cluster" goes with occlusion "none" only.
     """
 
     occlusion: str = "measurement-wise"
+    likelihood: str = "derived"
     p_d: float = 0.98
     range_noise: float = 0.02
     clutter_per_scan: float = 5.0
@@ -92,6 +102,7 @@ class ScanTrackerConfig:
     confirm_hits: int = 3
     confirm_window: int = 5
     gate_sigmas: float = 5.0
+    cluster_noise: float = 0.1
 
     def __post_init__(self) -> None:
         self.validate()
@@ -101,6 +112,12 @@ class ScanTrackerConfig:
         if self.occlusion not in SCAN_OCCLUSION_NAMES:
             raise ValueError(f"occlusion must be one of {', '.join(SCAN_OCCLUSION_NAMES)}, "
                              f"not {self.occlusion!r}")
+        if self.likelihood not in SCAN_LIKELIHOOD_NAMES:
+            raise ValueError(f"likelihood must be one of {', '.join(SCAN_LIKELIHOOD_NAMES)}, "
+                             f"not {self.likelihood!r}")
+        if self.likelihood == "cluster" and self.occlusion != "none":
+            raise ValueError("likelihood 'cluster' (points, no beams) goes with occlusion "
+                             f"'none', not {self.occlusion!r}")
         check_ranges(self, SCAN_RANGES)
         if self.confirm_hits > self.confirm_window:
             raise ValueError(f"confirm_hits must be between 1 and confirm_window "

@@ -12,6 +12,8 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
   matched to no track going in, are counted apart (`entered`: those matched going in); the
   spells of 1 to 2 s also on their own (a spell's duration is from its first to its last
   fully occluded scan, so a one-scan spell lasts 0 s).
+- Identity switches: a person matched (as above, every scan) to another track than the one
+  it was last matched to.
 - Scans a second: `update` calls timed with time.perf_counter, the scene simulated beforehand.
 """
 
@@ -45,6 +47,8 @@ class ScanRun:
     long_entered: int  # of `entered`, the spells of a second or more
     long_kept: int
     scans_per_second: float
+    likelihood: str = "derived"
+    switches: int = 0  # identity switches: a person matched to another track than last time
 
 
 def match(truth: np.ndarray, estimates: np.ndarray, cutoff: float) -> tuple[np.ndarray, ...]:
@@ -60,10 +64,11 @@ def match(truth: np.ndarray, estimates: np.ndarray, cutoff: float) -> tuple[np.n
 
 def run_scene(seed: int, occlusion: str, scans: int = 600,
               scene: LidarSceneConfig | None = None, tracker: ScanTrackerConfig | None = None,
-              cutoff: float = 1.0, max_spell: float = 2.0) -> ScanRun:
+              cutoff: float = 1.0, max_spell: float = 2.0,
+              likelihood: str = "derived") -> ScanRun:
     scene = scene or LidarSceneConfig()
     config = (tracker or ScanTrackerConfig()).replace(
-        occlusion=occlusion, p_d=scene.p_d, range_noise=scene.range_noise,
+        occlusion=occlusion, likelihood=likelihood, p_d=scene.p_d, range_noise=scene.range_noise,
         clutter_per_scan=scene.clutter_per_scan, max_range=scene.max_range,
         radius=scene.person_radius)
     frames = list(simulate_scene(scene, scans, seed))
@@ -71,6 +76,8 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
     total = np.zeros(4)
     assigned: dict[tuple[int, int], int] = {}  # (scan, truth id) -> track id
     elapsed = 0.0
+    last_track: dict[int, int] = {}  # truth id -> the track it was last matched to
+    switches = 0
     times, ids, occluded = [], [], []
     for i, s in enumerate(frames):
         start = time.perf_counter()
@@ -84,6 +91,9 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
         tid = s.objects.id[person]
         for r, c in zip(rows, cols, strict=True):
             assigned[(i, int(tid[r]))] = int(out.ids[c])
+            before = last_track.get(int(tid[r]))
+            switches += before is not None and before != int(out.ids[c])
+            last_track[int(tid[r])] = int(out.ids[c])
         times.append(np.full(len(s.objects), s.time))
         ids.append(s.objects.id)
         occluded.append(s.occluded)
@@ -108,7 +118,7 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
             long_kept += same
     mean = total / max(len(frames), 1)
     return ScanRun(seed, occlusion, len(frames), *mean, n, entered, kept, long_entered,
-                   long_kept, len(frames) / max(elapsed, 1e-9))
+                   long_kept, len(frames) / max(elapsed, 1e-9), likelihood, int(switches))
 
 
 def table(runs: list[ScanRun]) -> str:

@@ -1,6 +1,8 @@
 """The lidar scan tracker (issue 24, item 2): the box tracker's Poisson multi-Bernoulli filter
 (`occtrack.filters.gmpmb`) fed whole 2-D scans through the scan measurement model
 (`occtrack.models.scan_segments`) and the scan occlusion term (`occtrack.occlusion.scan`).
+`likelihood` picks the baselines: "hand-made" (`models.scan_hand_made`), "cluster"
+(cluster-then-track, `models.point`).
 
     tracker = ScanTracker(ScanTrackerConfig(occlusion="measurement-wise"))
     for time, angles, ranges in scans:          # angles in the world frame, ranges inf: none
@@ -24,6 +26,8 @@ import numpy.typing as npt
 from occtrack.config.scan import CENTIMETRES, ScanTrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.models.beam import BeamModel
+from occtrack.models.point import PointMeasurement
+from occtrack.models.scan_hand_made import HandMadeScanMeasurement
 from occtrack.models.scan_segments import ScanBirths, ScanMeasurement
 from occtrack.occlusion.scan import scan_occlusion
 
@@ -81,8 +85,14 @@ class ScanTracker:
         self.beam_model = BeamModel(p_d=c.p_d, sigma=c.range_noise,
                                     clutter_rate=c.clutter_per_scan / self.beams,
                                     max_range=c.max_range)
-        self.measurement = ScanMeasurement(self.beam_model, c.radius, c.segment_jump,
-                                           c.segment_gap, CENTIMETRES, tuple(self.origin))
+        frame = (c.segment_jump, c.segment_gap, CENTIMETRES, tuple(self.origin))
+        if c.likelihood == "cluster":
+            self.measurement = PointMeasurement(self.beam_model, c.radius, c.cluster_noise,
+                                                c.clutter_per_scan, *frame)
+        elif c.likelihood == "hand-made":
+            self.measurement = HandMadeScanMeasurement(self.beam_model, c.radius, *frame)
+        else:
+            self.measurement = ScanMeasurement(self.beam_model, c.radius, *frame)
         births = ScanBirths(self.measurement, c.birth_mass, c.edge_birth_mass,
                             c.initial_birth_mass, c.edge_width, c.birth_position_std,
                             c.birth_speed_std, c.min_birth_beams)

@@ -1,0 +1,119 @@
+"""The lidar scan tracker's baselines (issue 24): the hand-made beam factor, the point model
+of cluster-then-track, their settings, and `occtrack reproduce lidar --json`."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.stats import multivariate_normal
+
+from occtrack.cli import main
+from occtrack.config.scan import ScanTrackerConfig
+from occtrack.models.beam import BeamModel
+from occtrack.models.point import PointMeasurement
+from occtrack.models.scan_geometry import disc_ranges
+from occtrack.models.scan_hand_made import BAND, PASSED, _other_beams_hand_made, hand_made_factor
+from occtrack.models.scan_segments import ScanMeasurement
+from occtrack.tracker.scan import ScanTracker
+
+BEAMS = 720
+ANGLES = -np.pi + (np.arange(BEAMS) + 0.5) * 2 * np.pi / BEAMS
+MODEL = BeamModel(p_d=0.98, sigma=0.02, clutter_rate=5.0 / BEAMS, max_range=20.0)
+RADIUS = 0.25
+
+
+def test_the_hand_made_factor_takes_its_fixed_value_in_each_regime():
+    rho = np.full(6, 5.0)
+    s = MODEL.sigma
+    z = np.array([np.inf, 25.0, 5.0 + 2 * BAND * s, 5.0 + 0.5 * BAND * s, 5.0, 1.0])
+    f = hand_made_factor(z, rho, s, MODEL.max_range)
+    # none and beyond: the fixed low factor; near and closer: 1, whatever P_D
+    assert f.tolist() == [PASSED, PASSED, PASSED, 1.0, 1.0, 1.0]
+
+
+def _through(centre):
+    """The beams through the disc at `centre` (from the origin), and their near ranges."""
+    u = np.c_[np.cos(ANGLES), np.sin(ANGLES)]
+    d = u[:, 0] * centre[1] - u[:, 1] * centre[0]
+    t = u @ np.asarray(centre)
+    hit = (np.abs(d) < RADIUS) & (t > 0)
+    return hit, t - np.sqrt(np.maximum(RADIUS**2 - d**2, 0.0))
+
+
+@pytest.mark.parametrize("scene, expected", [("empty", PASSED), ("wall in front", 1.0),
+                                             ("on the surface", 1.0)])
+def test_the_compiled_hand_made_term_is_the_sum_of_the_factors_over_the_beams_through_the_disc(
+        scene, expected):
+    centre = np.array([5.0, 2.0])
+    hit, rho = _through(centre)
+    ranges = {"empty": np.full(BEAMS, np.inf), "wall in front": np.full(BEAMS, 2.0),
+              "on the surface": np.where(hit, rho, np.inf)}[scene]
+    out = _other_beams_hand_made(centre[None], np.array([7]), np.zeros(2), ANGLES, ranges,
+                                 np.full(BEAMS, -1), RADIUS, MODEL.max_range, MODEL.sigma,
+                                 PASSED, BAND)
+    assert hit.sum() > 3
+    assert out[0] == pytest.approx(hit.sum() * np.log(expected))
+
+
+def test_the_point_models_likelihood_is_the_gaussian_of_the_centre_plus_its_noise():
+    noise = 0.1
+    model = PointMeasurement(MODEL, RADIUS, noise, 5.0)
+    plain = ScanMeasurement(MODEL, RADIUS)
+    rng = np.random.default_rng(1)
+    K = 3
+    means = np.zeros((K, 2, 3))
+    means[:, :, 0] = model.to_filter(rng.uniform(-5, 5, (K, 2)))
+    covs = np.zeros((K, 2, 3, 3))
+    for axis in range(2):
+        covs[:, axis] = np.diag([30.0**2, 50.0**2, 1e-6])
+    zhat, S = model.innovation(means, covs)
+    centre, P = plain.innovation(means, covs)
+    assert np.allclose(zhat, centre) and np.allclose(S, P + noise**2 * np.eye(2))
+    seg = plain.segments(ANGLES, disc_ranges(np.zeros(2), ANGLES,
+                                             np.array([[4.0, 1.0], [-2.0, 3.0]]), RADIUS).min(1))
+    assert len(seg) == 2
+    k, j = np.array([0, 1, 2, 0]), np.array([0, 0, 1, 1])
+    got = model.loglik_pairs(means, zhat, S, seg, None, k, j)
+    want = [multivariate_normal(zhat[a], S[a]).logpdf(seg.centre[b])
+            for a, b in zip(k, j, strict=True)]
+    assert np.allclose(got, want)
+    # clutter: the scan's spurious returns spread over the sensor's disc
+    assert model.clutter_density(seg, None, None) == pytest.approx(
+        np.full(2, 5.0 / (np.pi * MODEL.max_range**2)))
+    # the update is the Kalman update, per axis, in the filter's units
+    m2, P2 = means.copy(), covs.copy()
+    model.update_rows(m2, P2, np.array([1]), seg, None, np.array([0]))
+    z = model.to_filter(seg.centre[0])
+    for axis in range(2):
+        Pa = covs[1, axis]
+        gain = Pa[:, 0] / (Pa[0, 0] + (noise * model.unit) ** 2)
+        assert np.allclose(m2[1, axis], means[1, axis] + gain * (z[axis] - means[1, axis, 0]))
+        assert np.allclose(P2[1, axis], Pa - np.outer(gain, Pa[0]))
+    assert np.array_equal(m2[0], means[0]) and np.array_equal(m2[2], means[2])
+
+
+def test_the_likelihood_setting_is_checked_and_picks_the_model():
+    with pytest.raises(ValueError, match="likelihood must be one of"):
+        ScanTrackerConfig(likelihood="hand made")
+    with pytest.raises(ValueError, match="goes with occlusion 'none'"):
+        ScanTrackerConfig(likelihood="cluster")
+    kinds = {name: type(ScanTracker(ScanTrackerConfig(likelihood=name, occlusion="none"))
+                        .measurement).__name__ for name in ("derived", "hand-made", "cluster")}
+    assert kinds == {"derived": "ScanMeasurement", "hand-made": "HandMadeScanMeasurement",
+                     "cluster": "PointMeasurement"}
+    assert ScanTrackerConfig.from_dict({"likelihood": "hand-made"}).likelihood == "hand-made"
+
+
+def test_reproduce_lidar_json_is_one_object_of_the_documented_shape(capsys):
+    assert main(["reproduce", "lidar", "--json", "--seeds", "0", "--scans", "60",
+                 "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out) == {"full_occlusions", "trackers"}
+    assert isinstance(out["full_occlusions"], int) and out["full_occlusions"] > 0
+    assert list(out["trackers"]) == ["derived", "hand-made", "none", "cluster"]
+    for cell in out["trackers"].values():
+        assert set(cell) == {"gospa", "bridged"}
+        assert len(cell["gospa"]) == 1 and 0 < cell["gospa"][0] < 2
+        assert 0 <= cell["bridged"] <= 1
