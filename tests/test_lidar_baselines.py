@@ -117,3 +117,22 @@ def test_reproduce_lidar_json_is_one_object_of_the_documented_shape(capsys):
         assert set(cell) == {"gospa", "bridged"}
         assert len(cell["gospa"]) == 1 and 0 < cell["gospa"][0] < 2
         assert 0 <= cell["bridged"] <= 1
+
+
+def test_reproduce_lidar_draws_one_scan_and_never_overwrites(tmp_path, capsys):
+    """--figure draws the scan where the derived tracker holds the most fully occluded people
+    that the tracker without occlusion lost; an existing file is refused unless --force."""
+    pytest.importorskip("matplotlib")
+    from occtrack.experiments.scan_tracking import occlusion_picture
+
+    picture = occlusion_picture(0, 150)
+    assert picture.time >= 10.0 and set(picture.tracks) == {"measurement-wise", "none"}
+    assert len(picture.people) == len(picture.occluded) and picture.returns.shape[1] == 2
+    figure = tmp_path / "scan.png"
+    args = ["reproduce", "lidar", "--seeds", "0", "--scans", "150", "--trackers", "none",
+            "--quiet", "--figure", str(figure)]
+    assert main(args) == 0
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    capsys.readouterr()
+    assert main(args) != 0  # the figure exists now
+    assert "exists" in capsys.readouterr().err

@@ -70,6 +70,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "measurement-wise occlusion term)")
     parser.add_argument("--jobs", type=positive_int, default=1,
                         help="worker processes (default 1: in this process)")
+    parser.add_argument("--figure", metavar="PNG",
+                        help="also draw one scan of the first seed (within --scans) where the "
+                             "derived tracker holds fully occluded people that the tracker "
+                             "without occlusion has lost (viz extra)")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing figure")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -135,6 +140,10 @@ def format_table(result: dict, seeds: list[int], scans: int) -> str:
 
 def run(args: argparse.Namespace) -> int:
     seeds = list(dict.fromkeys(args.seeds))
+    if args.figure:
+        from occtrack.viz.frame import check_new
+
+        check_new(args.figure, args.force)  # refuse before the long run, not after
     start = time.perf_counter()
     result = compute(seeds, args.scans, list(dict.fromkeys(args.trackers)), args.jobs,
                      args.quiet)
@@ -147,5 +156,14 @@ def run(args: argparse.Namespace) -> int:
         print(closing, file=sys.stderr)
     else:
         print(format_table(result, seeds, args.scans))
+    if args.figure:
+        from occtrack.experiments.scan_tracking import occlusion_picture
+        from occtrack.viz.lidar import draw_scan_tracks
+
+        picture = occlusion_picture(seeds[0], args.scans)
+        draw_scan_tracks(args.figure, picture, args.force)
+        if not args.json:
+            print(f"scan at {picture.time:.1f} s of seed {seeds[0]} drawn in {args.figure}")
+    if not args.json:
         print(closing)
     return 0
