@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from occtrack.jit import njit
+from occtrack.models.scan_geometry import beam_window, near_range
 from occtrack.models.scan_segments import ScanMeasurement
 
 PASSED = 0.1  # the factor of a beam that passed through the disc
@@ -69,7 +70,6 @@ def _other_beams_hand_made(centre, j, origin, angle, ranges, segment_of_beam, ra
     that are not segment j[p]'s."""
     P, B = len(j), len(angle)
     out = np.zeros(P)
-    turn = 2.0 * math.pi
     log_passed = math.log(passed)
     for p in range(P):
         px, py = centre[p, 0] - origin[0], centre[p, 1] - origin[1]
@@ -78,22 +78,13 @@ def _other_beams_hand_made(centre, j, origin, angle, ranges, segment_of_beam, ra
             continue
         half = math.asin(radius / dist)
         bearing = math.atan2(py, px)
-        low = bearing - half
-        base = math.floor((low - angle[0]) / turn) * turn
+        lo0, hi0, lo1, hi1 = beam_window(angle, bearing - half, bearing + half)
         total = 0.0
-        for shift in (0.0, turn):
-            lo = np.searchsorted(angle, low - base + shift - turn)
-            hi = np.searchsorted(angle, bearing + half - base + shift - turn, side="right")
-            for b in range(lo, hi):
+        for w in range(2):
+            for b in range(lo0 if w == 0 else lo1, hi0 if w == 0 else hi1):
                 if segment_of_beam[b] == j[p]:
                     continue
-                ux, uy = math.cos(angle[b]), math.sin(angle[b])
-                t_c = ux * px + uy * py
-                d = -uy * px + ux * py
-                h2 = radius * radius - d * d
-                if h2 <= 0.0:
-                    continue
-                rho = t_c - math.sqrt(h2)
+                rho = near_range(angle[b], px, py, radius)
                 if rho <= 0.0:
                     continue
                 zb = ranges[b] if ranges[b] < max_range else max_range

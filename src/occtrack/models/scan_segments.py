@@ -72,6 +72,7 @@ from scipy.special import ndtr
 
 from occtrack.jit import njit
 from occtrack.models.beam import BeamModel
+from occtrack.models.scan_geometry import beam_window
 
 ITERATIONS = 3  # iterated EKF: linearisations a (component, segment) pair
 MAX_SLOPE = 5.0  # hit beams: |d rho / d c| across the beam at most this
@@ -536,7 +537,6 @@ def _other_beams(centre, cov, j, origin, angle, ranges, segment_of_beam, radius,
     `models.scan.beam_terms`, compiled)."""
     P, B = len(j), len(angle)
     out = np.zeros(P)
-    turn = 2.0 * math.pi
     for p in range(P):
         px, py = centre[p, 0] - origin[0], centre[p, 1] - origin[1]
         dist = math.hypot(px, py)
@@ -546,14 +546,10 @@ def _other_beams(centre, cov, j, origin, angle, ranges, segment_of_beam, radius,
         widen = spread * math.sqrt(max(c00, c11))
         half = math.asin(min(max((radius + widen) / max(dist, 1e-9), 0.0), 1.0))
         bearing = math.atan2(py, px)
-        low = bearing - half - 1e-9
-        base = math.floor((low - angle[0]) / turn) * turn
+        lo0, hi0, lo1, hi1 = beam_window(angle, bearing - half - 1e-9, bearing + half + 1e-9)
         total = 0.0
-        for shift in (0.0, turn):
-            lo = np.searchsorted(angle, low - base + shift - turn)
-            hi = np.searchsorted(angle, bearing + half + 1e-9 - base + shift - turn,
-                                 side="right")
-            for b in range(lo, hi):
+        for w in range(2):
+            for b in range(lo0 if w == 0 else lo1, hi0 if w == 0 else hi1):
                 if segment_of_beam[b] == j[p]:
                     continue
                 ux, uy = math.cos(angle[b]), math.sin(angle[b])

@@ -29,6 +29,7 @@ from collections.abc import Callable
 import numpy as np
 
 from occtrack.jit import njit
+from occtrack.models.scan_geometry import beam_window, near_range
 from occtrack.occlusion.base import NoOcclusion, OcclusionContext, OcclusionModel, OcclusionTerms
 
 # Gauss-Hermite (probabilists'), 5 nodes an axis: exact to degree 9. (3 nodes put 1/6 of the
@@ -83,7 +84,6 @@ def _hidden_at(centre, origin, angle, ranges, max_range, sigma, radius):
     each, and the product of 1 - Phi((z_b - rho) / sigma) (z_b = max_range for no return)."""
     K, B = len(centre), len(angle)
     out = np.zeros(K)
-    turn = 2.0 * math.pi
     for k in range(K):
         px, py = centre[k, 0] - origin[0], centre[k, 1] - origin[1]
         dist = math.hypot(px, py)
@@ -91,20 +91,11 @@ def _hidden_at(centre, origin, angle, ranges, max_range, sigma, radius):
             continue
         bearing = math.atan2(py, px)
         half = math.asin(radius / dist)
-        low = bearing - half
-        base = math.floor((low - angle[0]) / turn) * turn
+        lo0, hi0, lo1, hi1 = beam_window(angle, bearing - half, bearing + half)
         log_q, reached = 0.0, False
-        for shift in (0.0, turn):
-            lo = np.searchsorted(angle, low - base + shift - turn)
-            hi = np.searchsorted(angle, bearing + half - base + shift - turn, side="right")
-            for b in range(lo, hi):
-                ux, uy = math.cos(angle[b]), math.sin(angle[b])
-                t_c = ux * px + uy * py
-                d = -uy * px + ux * py
-                h2 = radius * radius - d * d
-                if h2 <= 0.0:
-                    continue
-                rho = t_c - math.sqrt(h2)
+        for w in range(2):
+            for b in range(lo0 if w == 0 else lo1, hi0 if w == 0 else hi1):
+                rho = near_range(angle[b], px, py, radius)
                 if rho <= 0.0:
                     continue
                 reached = True
