@@ -106,6 +106,25 @@ def test_the_likelihood_setting_is_checked_and_picks_the_model():
     assert ScanTrackerConfig.from_dict({"likelihood": "hand-made"}).likelihood == "hand-made"
 
 
+def test_a_spell_counts_when_its_person_is_there_on_both_sides_and_is_kept_by_one_track():
+    from occtrack.experiments.scan_tracking import count_bridged
+    from occtrack.scenarios.lidar.scene import Occlusions
+
+    # scans 0..29 at 10 a second; person 1 hidden at scans 5-7 (kept by track 9), 12-24
+    # (1.2 s, another track after), person 2 at 15-16 (entered at scan 15: left out),
+    # person 3 at 20-21 (matched to no track going in: not kept), 25-28 (left at 28: out)
+    index = {i: i for i in range(30)}
+    spells = Occlusions(np.array([1, 1, 2, 3, 3]),
+                        np.array([0.5, 1.2, 1.5, 2.0, 2.5]), np.array([0.7, 2.4, 1.6, 2.1, 2.8]))
+    present = ({(i, 1) for i in range(30)} | {(i, 2) for i in range(15, 30)}
+               | {(i, 3) for i in range(29)})
+    assigned = {(4, 1): 9, (8, 1): 9, (11, 1): 9, (25, 1): 7, (17, 2): 5, (22, 3): 4,
+                (24, 3): 4, (29, 3): 4}
+    assert count_bridged(spells, assigned, present, index, 10.0, 2.0) == (3, 2, 1, 1, 0)
+    # shorter spells only
+    assert count_bridged(spells, assigned, present, index, 10.0, 1.0) == (2, 1, 1, 0, 0)
+
+
 def test_reproduce_lidar_json_is_one_object_of_the_documented_shape(capsys):
     assert main(["reproduce", "lidar", "--json", "--seeds", "0", "--scans", "60",
                  "--quiet"]) == 0

@@ -240,6 +240,23 @@ def test_full_occlusion_spells_from_truth_rows():
     assert spells.longer_than(0.15) == 2
 
 
+def test_a_glimpse_too_small_to_be_seen_does_not_end_a_spell():
+    # one object, scans 0.0 .. 0.9: seen, hidden, a one-beam glimpse, hidden, seen, then a
+    # run unseen without a fully occluded scan (far away, say), then seen
+    time = np.round(np.arange(10) * 0.1, 1)
+    ids = np.ones(10, np.int64)
+    occ = np.array([0, 1, 0, 1, 1, 0, 0, 0, 0, 0], bool)
+    seen = np.array([1, 0, 0, 0, 0, 1, 0, 0, 1, 1], bool)
+    order = np.random.default_rng(1).permutation(10)
+    bare = full_occlusions(time[order], ids[order], occ[order], period=0.1)
+    assert sorted(zip(bare.first.tolist(), bare.last.tolist(), strict=True)) == [
+        (0.1, 0.1), (0.3, 0.4)]
+    merged = full_occlusions(time[order], ids[order], occ[order], period=0.1,
+                             seen=seen[order])
+    assert (merged.id.tolist(), merged.first.tolist(), merged.last.tolist()) == (
+        [1], [0.1], [0.4])
+
+
 def test_the_default_scene_has_over_50_full_occlusions_longer_than_a_second():
     config = LidarSceneConfig()
     t, i, o = [], [], []

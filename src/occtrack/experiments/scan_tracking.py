@@ -4,14 +4,20 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
 - GOSPA (`occtrack.metrics.gospa`): Euclidean distance between true and reported centres,
   c = 1 m, p = 1, alpha = 2, per scan, averaged over the scans; people only (vehicles none
   by default).
-- Kept through a full occlusion: for each spell of full occlusion (`full_occlusions`) shorter
-  than `max_spell` s, the person is matched to a track at the scan just before the spell and at
-  the first scan after it (per scan, the assignment that minimises the summed distance over the
-  pairs closer than `match` m, scipy's linear_sum_assignment); kept when both matches exist and
-  name the same track. Spells at the start or the end of the scene, or whose person was
-  matched to no track going in, are counted apart (`entered`: those matched going in); the
-  spells of 1 to 2 s also on their own (a spell's duration is from its first to its last
-  fully occluded scan, so a one-scan spell lasts 0 s).
+- Kept through a full occlusion: a spell of full occlusion runs while the person is not seen
+  (fewer than `SEEN_BEAMS` beams return from it) and holds at least one scan where no beam
+  reaches it (`full_occlusions` with `seen`): a one-beam glimpse, which no tracker can tell
+  from a clutter return, does not end it. For each spell shorter than `max_spell` s with the
+  person in the scene on both sides (seen the scan before and the scan after), the person is
+  matched to a track at the scan just before the spell and at the first scan after it (per
+  scan, the assignment that minimises the summed distance over the pairs closer than `match`
+  m, scipy's linear_sum_assignment); kept when both matches exist and name the same track.
+  Spells at the start or the end of the scene or of the person's walk (entering or leaving
+  while hidden) are left out; those whose person was matched to no track going in count as
+  not kept (`entered`: those matched going in); the spells of 1 to 2 s also on their own (a
+  spell's duration is from its first to its last unseen scan, so a one-scan spell lasts 0 s).
+  `strict_spells` / `strict_kept`: the same count over the spells of the scene's flag alone
+  (every fully occluded run, so a glimpse splits a spell in two).
 - Identity switches: a person matched (as above, every scan) to another track than the one
   it was last matched to.
 - Scans a second: `update` calls timed with time.perf_counter, the scene simulated beforehand.
@@ -29,7 +35,11 @@ from occtrack.config.lidar import LidarSceneConfig
 from occtrack.config.scan import ScanTrackerConfig
 from occtrack.metrics.gospa import gospa
 from occtrack.scenarios.lidar import full_occlusions, simulate_scene
+from occtrack.scenarios.lidar.scene import Occlusions
 from occtrack.tracker.scan import ScanTracker
+
+SEEN_BEAMS = 2  # a person is seen in a scan when two beams return from it: one alone looks
+# like a clutter return (5 a scan by default), and a disc needs two points to be fitted
 
 
 @dataclass(frozen=True)
@@ -49,6 +59,8 @@ class ScanRun:
     scans_per_second: float
     likelihood: str = "derived"
     switches: int = 0  # identity switches: a person matched to another track than last time
+    strict_spells: int = 0  # the spells of the scene's flag alone (a glimpse ends them)
+    strict_kept: int = 0
 
 
 def match(truth: np.ndarray, estimates: np.ndarray, cutoff: float) -> tuple[np.ndarray, ...]:
@@ -122,6 +134,31 @@ def occlusion_picture(seed: int = 0, scans: int = 600, models=("measurement-wise
     return best
 
 
+def count_bridged(spells: Occlusions, assigned: dict, present: set, index: dict, rate: float,
+                  max_spell: float) -> tuple[int, int, int, int, int]:
+    """(spells, entered, kept, long_entered, long_kept) over the `spells` shorter than
+    `max_spell` s with the person in the scene (`present`: (scan, id)) the scan before and the
+    scan after; `assigned` (scan, id) -> the track matched, `index` round(time * rate) -> scan."""
+    n = entered = kept = long_entered = long_kept = 0
+    for pid, first, last in zip(spells.id.tolist(), spells.first, spells.last, strict=True):
+        before = index.get(round(first * rate) - 1)
+        after = index.get(round(last * rate) + 1)
+        if (last - first >= max_spell or (before, pid) not in present
+                or (after, pid) not in present):
+            continue
+        n += 1
+        going_in = assigned.get((before, pid))
+        if going_in is None:
+            continue
+        entered += 1
+        same = assigned.get((after, pid)) == going_in
+        kept += same
+        if last - first >= 1.0:
+            long_entered += 1
+            long_kept += same
+    return n, entered, kept, long_entered, long_kept
+
+
 def run_scene(seed: int, occlusion: str, scans: int = 600,
               scene: LidarSceneConfig | None = None, tracker: ScanTrackerConfig | None = None,
               cutoff: float = 1.0, max_spell: float = 2.0,
@@ -135,7 +172,8 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
     elapsed = 0.0
     last_track: dict[int, int] = {}  # truth id -> the track it was last matched to
     switches = 0
-    times, ids, occluded = [], [], []
+    times, ids, occluded, seen = [], [], [], []
+    present: set[tuple[int, int]] = set()  # (scan, truth id) of the people in the scene
     for i, s in enumerate(frames):
         start = time.perf_counter()
         out = tr.update(s.range, s.pose[2] + s.angle, s.time, s.pose[:2])
@@ -151,31 +189,23 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
             before = last_track.get(int(tid[r]))
             switches += before is not None and before != int(out.ids[c])
             last_track[int(tid[r])] = int(out.ids[c])
-        times.append(np.full(len(s.objects), s.time))
-        ids.append(s.objects.id)
-        occluded.append(s.occluded)
-    spells = full_occlusions(np.concatenate(times), np.concatenate(ids),
-                             np.concatenate(occluded), scene.period)
+        present.update((i, int(p)) for p in tid)
+        times.append(np.full(len(tid), s.time))
+        ids.append(tid)
+        occluded.append(s.occluded[person])
+        seen.append(s.visible[person] >= SEEN_BEAMS)
+    rows_ = [np.concatenate(x) for x in (times, ids, occluded)]
     index = {round(s.time * scene.rate): i for i, s in enumerate(frames)}
-    n = entered = kept = long_entered = long_kept = 0
-    for pid, first, last in zip(spells.id, spells.first, spells.last, strict=True):
-        before = index.get(round(first * scene.rate) - 1)
-        after = index.get(round(last * scene.rate) + 1)
-        if last - first >= max_spell or before is None or after is None:
-            continue
-        n += 1
-        going_in = assigned.get((before, int(pid)))
-        if going_in is None:
-            continue
-        entered += 1
-        same = assigned.get((after, int(pid))) == going_in
-        kept += same
-        if last - first >= 1.0:
-            long_entered += 1
-            long_kept += same
+
+    n, entered, kept, long_entered, long_kept = count_bridged(
+        full_occlusions(*rows_, scene.period, seen=np.concatenate(seen)), assigned, present,
+        index, scene.rate, max_spell)
+    strict, _, strict_kept, _, _ = count_bridged(
+        full_occlusions(*rows_, scene.period), assigned, present, index, scene.rate, max_spell)
     mean = total / max(len(frames), 1)
     return ScanRun(seed, occlusion, len(frames), *mean, n, entered, kept, long_entered,
-                   long_kept, len(frames) / max(elapsed, 1e-9), likelihood, int(switches))
+                   long_kept, len(frames) / max(elapsed, 1e-9), likelihood, int(switches),
+                   strict, strict_kept)
 
 
 def table(runs: list[ScanRun]) -> str:

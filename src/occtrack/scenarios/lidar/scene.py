@@ -116,12 +116,21 @@ class Occlusions:
 
 
 def full_occlusions(time: np.ndarray, ids: np.ndarray, occluded: np.ndarray,
-                    period: float) -> Occlusions:
+                    period: float, seen: np.ndarray | None = None) -> Occlusions:
     """The spells of full occlusion in truth rows (time, id, occluded; any order): runs of
-    fully occluded rows of one id at successive scans (`period` apart)."""
+    fully occluded rows of one id at successive scans (`period` apart).
+
+    With `seen` (rows where the object shows enough of itself to be told from a clutter return,
+    say two beams), a spell is a run of rows not seen that holds at least one fully occluded
+    row, from its first to its last row: a glimpse too small to be seen does not end it."""
     order = np.lexsort((time, ids))
     t, i, occ = time[order], ids[order], occluded[order].astype(bool)
+    run = occ if seen is None else ~seen[order].astype(bool)
     follows = np.r_[False, (i[1:] == i[:-1]) & (np.diff(t) < 1.5 * period)]
-    starts = occ & ~(follows & np.r_[False, occ[:-1]])
-    ends = occ & ~np.r_[follows[1:] & occ[1:], False]
+    starts = run & ~(follows & np.r_[False, run[:-1]])
+    ends = run & ~np.r_[follows[1:] & run[1:], False]
+    if seen is not None:  # keep the runs with a fully occluded row
+        which = np.cumsum(starts) - 1
+        hidden = np.bincount(which[run], weights=occ[run], minlength=int(starts.sum())) > 0
+        return Occlusions(i[starts][hidden], t[starts][hidden], t[ends][hidden])
     return Occlusions(i[starts], t[starts], t[ends])
