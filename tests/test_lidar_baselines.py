@@ -4,6 +4,7 @@ of cluster-then-track, their settings, and `occtrack reproduce lidar --json`."""
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -155,3 +156,74 @@ def test_reproduce_lidar_draws_one_scan_and_never_overwrites(tmp_path, capsys):
     capsys.readouterr()
     assert main(args) != 0  # the figure exists now
     assert "exists" in capsys.readouterr().err
+
+
+def test_reproduce_lidar_animates_the_scans_around_the_picked_one_and_never_overwrites(
+        tmp_path, capsys):
+    """--animation writes a GIF of --animation-scans frames, a scan each, around the scan
+    --figure draws; an existing file is refused before the run unless --force, a short run
+    too."""
+    pytest.importorskip("matplotlib")
+    from PIL import Image
+
+    gif = tmp_path / "scans.gif"
+
+    def reproduce(scans, *more):
+        return main(["reproduce", "lidar", "--seeds", "0", "--scans", str(scans), "--trackers",
+                     "none", "--quiet", "--animation", str(gif), "--animation-scans", "4",
+                     *more])
+
+    assert reproduce(105) == 0
+    assert "(4 frames) animated in" in capsys.readouterr().out
+    with Image.open(gif) as image:
+        assert image.format == "GIF" and image.n_frames == 4
+        assert image.info["duration"] == 100  # ms: 10 frames a second, the scan rate
+    written = gif.read_bytes()
+    assert reproduce(105) != 0  # the animation exists now
+    assert "exists" in capsys.readouterr().err and gif.read_bytes() == written
+    assert reproduce(100, "--force") != 0  # no scan after the first 10 s to pick
+    assert "more than 100 scans" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scans.gif"]  # no temporary left
+
+
+def test_an_animation_is_a_frame_per_scan_on_fixed_axes_holding_everyone(tmp_path):
+    pytest.importorskip("matplotlib")
+    from PIL import Image
+
+    from occtrack.errors import OcctrackError
+    from occtrack.experiments.scan_tracking import OcclusionPicture, around
+    from occtrack.viz.lidar import animate_scan_tracks, window_limits
+
+    assert around(list(range(10)), 5, 4) == [3, 4, 5, 6]
+    assert around(list(range(10)), 0, 4) == [0, 1, 2, 3]
+    assert around(list(range(10)), 9, 4) == [6, 7, 8, 9]
+    assert around(list(range(3)), 1, 4) == [0, 1, 2]
+    pictures = [OcclusionPicture(
+        0.1 * k, np.zeros(2), np.array([[1.0 + k, 0.5], [-2.0, 3.0]]),
+        np.array([[1.0 + k, 0.75], [-2.0 - k, 3.25]]), np.array([1, 2]), np.array([False, k > 1]),
+        0.25, {"measurement-wise": (np.array([[1.0 + k, 0.7]]), np.array([7]), np.array([k > 1])),
+               "none": (np.array([[-9.0, -4.0 + k]]), np.array([8]), np.array([False]))})
+        for k in range(3)]
+    (x0, x1), (y0, y1) = window_limits(pictures)
+    assert x0 < -9.0 - 0.25 and x1 > 3.0 + 0.25 and y0 < -4.0 - 0.25 and y1 > 3.25 + 0.25
+    path = animate_scan_tracks(tmp_path / "three.gif", pictures)
+    with Image.open(path) as image:
+        assert image.n_frames == 3
+    with pytest.raises(OcctrackError, match="exists"):
+        animate_scan_tracks(path, pictures[:2])
+    animate_scan_tracks(path, pictures[:2], overwrite=True)
+    with Image.open(path) as image:
+        assert image.n_frames == 2
+    with pytest.raises(OcctrackError, match=r"\.gif"):
+        animate_scan_tracks(path.with_suffix(".png"), pictures)
+
+
+def test_a_picture_without_matplotlib_names_the_extra_before_the_run(monkeypatch, tmp_path,
+                                                                      capsys):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib fails
+    gif = tmp_path / "scans.gif"
+    assert main(["reproduce", "lidar", "--seeds", "0", "--scans", "1800", "--quiet",
+                 "--animation", str(gif)]) != 0
+    err = capsys.readouterr().err
+    assert "matplotlib" in err and 'pip install "occtrack[viz]"' in err
+    assert not gif.exists()

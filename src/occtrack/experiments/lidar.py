@@ -79,7 +79,16 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="also draw one scan of the first seed (within --scans) where the "
                              "derived tracker holds fully occluded people that the tracker "
                              "without occlusion has lost (viz extra)")
-    parser.add_argument("--force", action="store_true", help="overwrite an existing figure")
+    parser.add_argument("--animation", metavar="GIF",
+                        help="also animate the scans of the first seed around the one "
+                             "--figure draws, a frame per scan at the scan rate, in the same "
+                             "two panels: beams, people (the fully occluded filled), tracks "
+                             "(dashed while held hidden) (viz extra)")
+    parser.add_argument("--animation-scans", type=positive_int, default=60, metavar="N",
+                        help="frames of --animation: the N scans centred on the picked one "
+                             "(default 60: 6 s)")
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite an existing figure or animation")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -147,10 +156,19 @@ def format_table(result: dict, seeds: list[int], scans: int) -> str:
 
 def run(args: argparse.Namespace) -> int:
     seeds = list(dict.fromkeys(args.seeds))
-    if args.figure:
+    if args.figure or args.animation:  # refuse before the long run, not after
+        from occtrack.experiments.scan_tracking import check_pickable
+        from occtrack.extras import require
         from occtrack.viz.frame import check_new
+        from occtrack.viz.highway import check_path
 
-        check_new(args.figure, args.force)  # refuse before the long run, not after
+        require("matplotlib", "a picture (--figure, --animation)")
+        if args.figure:
+            check_new(args.figure, args.force)
+        if args.animation:
+            require("PIL", "--animation")  # matplotlib's PillowWriter
+            check_path(args.animation, (".gif",), args.force)
+        check_pickable(args.scans)
     start = time.perf_counter()
     result = compute(seeds, args.scans, list(dict.fromkeys(args.trackers)), args.jobs,
                      args.quiet)
@@ -163,14 +181,26 @@ def run(args: argparse.Namespace) -> int:
         print(closing, file=sys.stderr)
     else:
         print(format_table(result, seeds, args.scans))
-    if args.figure:
-        from occtrack.experiments.scan_tracking import occlusion_picture
-        from occtrack.viz.lidar import draw_scan_tracks
+    if args.figure or args.animation:
+        from occtrack.experiments.scan_tracking import around, occlusion_scans
 
-        picture = occlusion_picture(seeds[0], args.scans)
-        draw_scan_tracks(args.figure, picture, args.force)
+        pictures, picked = occlusion_scans(seeds[0], args.scans, quiet=args.quiet)
+        said = []
+        if args.figure:
+            from occtrack.viz.lidar import draw_scan_tracks
+
+            draw_scan_tracks(args.figure, pictures[picked], args.force)
+            said.append(f"scan at {pictures[picked].time:.1f} s of seed {seeds[0]} drawn in "
+                        f"{args.figure}")
+        if args.animation:
+            from occtrack.viz.lidar import animate_scan_tracks
+
+            window = around(pictures, picked, args.animation_scans)
+            animate_scan_tracks(args.animation, window, args.force, quiet=args.quiet)
+            said.append(f"scans {window[0].time:.1f} to {window[-1].time:.1f} s of seed "
+                        f"{seeds[0]} ({len(window)} frames) animated in {args.animation}")
         if not args.json:
-            print(f"scan at {picture.time:.1f} s of seed {seeds[0]} drawn in {args.figure}")
+            print("\n".join(said))
     if not args.json:
         print(closing)
     return 0

@@ -33,7 +33,9 @@ from scipy.optimize import linear_sum_assignment
 
 from occtrack.config.lidar import LidarSceneConfig
 from occtrack.config.scan import ScanTrackerConfig
+from occtrack.errors import OcctrackError
 from occtrack.metrics.gospa import gospa
+from occtrack.progress import progress
 from occtrack.scenarios.lidar import full_occlusions, simulate_scene
 from occtrack.scenarios.lidar.scene import Occlusions
 from occtrack.tracker.scan import ScanTracker
@@ -100,20 +102,48 @@ class OcclusionPicture:
     tracks: dict
 
 
-def occlusion_picture(seed: int = 0, scans: int = 600, models=("measurement-wise", "none"),
-                      scene: LidarSceneConfig | None = None) -> OcclusionPicture:
-    """The scan, after the first 10 s, where the most fully occluded people are held by a track
-    (within one radius) under the first model and by none under the second (ties: the
-    earliest)."""
+SETTLE = 10.0  # s: the scans before it are not picked (the trackers are still starting)
+
+
+def check_pickable(scans: int, scene: LidarSceneConfig | None = None) -> None:
+    """Refuse, before the run, a run too short for a picture: none of its scans after `SETTLE`."""
+    rate = (scene or LidarSceneConfig()).rate
+    if (scans - 1) / rate < SETTLE:
+        raise OcctrackError(f"a picture is picked after the first {SETTLE:g} s of the scene: "
+                            f"give more than {SETTLE * rate:g} scans")
+
+
+def _picture(s, scene: LidarSceneConfig, out: dict) -> OcclusionPicture:
+    person = s.objects.shapes.disc
+    returns = np.isfinite(s.range) & (s.range < scene.max_range)
+    bearing = s.pose[2] + s.angle[returns]
+    return OcclusionPicture(
+        s.time, s.pose[:2].copy(),
+        s.pose[:2] + s.range[returns, None] * np.column_stack([np.cos(bearing),
+                                                                np.sin(bearing)]),
+        s.objects.shapes.centre[person], s.objects.id[person], s.occluded[person],
+        scene.person_radius, {m: (o.positions, o.ids, o.occluded) for m, o in out.items()})
+
+
+def occlusion_scans(seed: int = 0, scans: int = 600, models=("measurement-wise", "none"),
+                    scene: LidarSceneConfig | None = None,
+                    quiet: bool = True) -> tuple[list[OcclusionPicture], int]:
+    """Every scan of a run as a picture, a tracker per model on the same scans, and the index
+    of the one picked: after the first `SETTLE` s, the scan where the most fully occluded people
+    are held by a track (its centre within two radii of theirs) under the first model and by none
+    under the second (ties: the earliest). A progress bar over the scans unless `quiet`."""
     scene = scene or LidarSceneConfig()
+    check_pickable(scans, scene)
     frames = list(simulate_scene(scene, scans, seed))
     trackers = {m: ScanTracker(tracker_config(scene, m), beams=scene.beams, rate=scene.rate)
                 for m in models}
-    best, best_key = None, (-1, 0)
-    for i, s in enumerate(frames):
+    pictures: list[OcclusionPicture] = []
+    best, best_key = -1, (-1, 0)
+    for i, s in enumerate(progress(frames, len(frames), "lidar picture", quiet)):
         out = {m: tr.update(s.range, s.pose[2] + s.angle, s.time, s.pose[:2])
                for m, tr in trackers.items()}
-        if s.time < 10.0:
+        pictures.append(_picture(s, scene, out))
+        if s.time < SETTLE:
             continue
         person = s.objects.shapes.disc
         hidden = s.objects.shapes.centre[person & s.occluded]
@@ -121,17 +151,30 @@ def occlusion_picture(seed: int = 0, scans: int = 600, models=("measurement-wise
                 .min(axis=1, initial=np.inf) < scene.person_radius * 2 for m in models]
         key = (int((held[0] & ~held[1]).sum()), -i)
         if key > best_key:
-            best_key = key
-            returns = np.isfinite(s.range) & (s.range < scene.max_range)
-            bearing = s.pose[2] + s.angle[returns]
-            best = OcclusionPicture(
-                s.time, s.pose[:2].copy(),
-                s.pose[:2] + s.range[returns, None] * np.column_stack([np.cos(bearing),
-                                                                        np.sin(bearing)]),
-                s.objects.shapes.centre[person], s.objects.id[person], s.occluded[person],
-                scene.person_radius,
-                {m: (o.positions, o.ids, o.occluded) for m, o in out.items()})
-    return best
+            best, best_key = i, key
+    return pictures, best
+
+
+def occlusion_picture(seed: int = 0, scans: int = 600, models=("measurement-wise", "none"),
+                      scene: LidarSceneConfig | None = None) -> OcclusionPicture:
+    """The scan `occlusion_scans` picks."""
+    pictures, best = occlusion_scans(seed, scans, models, scene)
+    return pictures[best]
+
+
+def around(pictures: list, index: int, length: int) -> list:
+    """`length` consecutive pictures (fewer if there are not so many) centred on `index`,
+    shifted to stay within the run."""
+    start = min(max(index - length // 2, 0), max(len(pictures) - length, 0))
+    return pictures[start:start + length]
+
+
+def occlusion_window(seed: int = 0, scans: int = 600, length: int = 60,
+                     models=("measurement-wise", "none"),
+                     scene: LidarSceneConfig | None = None) -> list[OcclusionPicture]:
+    """`length` consecutive scans around the one `occlusion_picture` picks, for an animation."""
+    pictures, best = occlusion_scans(seed, scans, models, scene)
+    return around(pictures, best, length)
 
 
 def count_bridged(spells: Occlusions, assigned: dict, present: set, index: dict, rate: float,
