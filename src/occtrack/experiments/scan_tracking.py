@@ -169,14 +169,6 @@ def around(pictures: list, index: int, length: int) -> list:
     return pictures[start:start + length]
 
 
-def occlusion_window(seed: int = 0, scans: int = 600, length: int = 60,
-                     models=("measurement-wise", "none"),
-                     scene: LidarSceneConfig | None = None) -> list[OcclusionPicture]:
-    """`length` consecutive scans around the one `occlusion_picture` picks, for an animation."""
-    pictures, best = occlusion_scans(seed, scans, models, scene)
-    return around(pictures, best, length)
-
-
 def count_bridged(spells: Occlusions, assigned: dict, present: set, index: dict, rate: float,
                   max_spell: float) -> tuple[int, int, int, int, int]:
     """(spells, entered, kept, long_entered, long_kept) over the `spells` shorter than

@@ -120,11 +120,11 @@ def window_limits(pictures, margin: float = 1.0) -> tuple[tuple[float, float], .
 
 def animate_scan_tracks(path: str | Path, pictures, overwrite: bool = False, fps: float = 10.0,
                         dpi: int = 70, beams: int = 6, quiet: bool = True) -> Path:
-    """A GIF of consecutive scans (`occtrack.experiments.scan_tracking.occlusion_window`), a
-    frame per scan at `fps` frames a second (10: the scene's scan rate, real time), each drawn
-    as the still (`draw_scan_panel`) with a faint line for every `beams`-th return, the axes
-    fixed over the animation (`window_limits`); matplotlib's PillowWriter. A progress bar over
-    the frames unless `quiet`."""
+    """A GIF of consecutive scans (`occtrack.experiments.scan_tracking.occlusion_scans`,
+    `around`), a frame per scan at `fps` frames a second (10: the scene's scan rate, real
+    time), each drawn as the still (`draw_scan_panel`) with a faint line for every `beams`-th
+    return, the axes fixed over the animation (`window_limits`); matplotlib's PillowWriter. A
+    progress bar over the frames unless `quiet`."""
     from occtrack.progress import progress
     from occtrack.viz.highway import check_path
     from occtrack.viz.output import save_animation
