@@ -13,7 +13,8 @@ trackers in the one PMB filter.
   occlusion term, which separates the likelihood's share from the occlusion term's.
 
 Per run (`experiments.scan_tracking.run_scene`): GOSPA per scan (c = 1 m, p = 1, alpha = 2)
-and its localisation / missed / false parts, identity switches, the full occlusions shorter
+and its localisation / missed / false parts, HOTA on positions (similarity 1 - d / 1 m), DetA,
+AssA, identity switches, the full occlusions shorter
 than 2 s bridged (the person seen, i.e. two beams on it, and matched to the same track just
 before and just after the spell; a one-beam glimpse does not end a spell), the same over the
 scene's bare flag (every fully occluded run, a glimpse splitting it), scans a second.
@@ -44,7 +45,8 @@ baselines in the same PMB filter, on the same scans:
   cluster    cluster-then-track: each segment's fitted centre as a point, no occlusion term
 
 The table: per tracker, the mean over the seeds of GOSPA per scan (c = 1 m) with its
-localisation / missed / false parts, identity switches a run, the full occlusions shorter than
+localisation / missed / false parts, HOTA on positions (TrackEval's, similarity
+max(0, 1 - d / 1 m)) with DetA and AssA, identity switches a run, the full occlusions shorter than
 2 s bridged with the same identity (of all of them, summed over the seeds; a spell lasts while
 fewer than two beams return from the person, so a one-beam glimpse, which looks like clutter,
 does not end it; the person seen on both sides), the same over every run of fully occluded
@@ -133,17 +135,18 @@ def format_table(result: dict, seeds: list[int], scans: int) -> str:
     lines = [f"Lidar walkway, seeds {' '.join(map(str, seeds))}, {scans} scans each: "
              f"{n} full occlusions under 2 s.",
              "",
-             "| tracker | GOSPA / scan (m) | loc. | missed | false | id switches / run | "
-             "bridged < 2 s | every fully occluded run < 2 s | scans/s |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| tracker | GOSPA / scan (m) | loc. | missed | false | HOTA | DetA | AssA | "
+             "id switches / run | bridged < 2 s | every fully occluded run < 2 s | scans/s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, runs in result.items():
         m = {f: float(np.mean([getattr(r, f) for r in runs]))
-             for f in ("gospa", "localisation", "missed", "false", "switches",
-                       "scans_per_second")}
+             for f in ("gospa", "localisation", "missed", "false", "hota", "deta", "assa",
+                       "switches", "scans_per_second")}
         kept = sum(r.kept for r in runs)
         strict = f"{sum(r.strict_kept for r in runs)}/{sum(r.strict_spells for r in runs)}"
         lines.append(f"| {name} | {m['gospa']:.3f} | {m['localisation']:.3f} | "
-                     f"{m['missed']:.3f} | {m['false']:.3f} | {m['switches']:.1f} | "
+                     f"{m['missed']:.3f} | {m['false']:.3f} | {m['hota']:.3f} | "
+                     f"{m['deta']:.3f} | {m['assa']:.3f} | {m['switches']:.1f} | "
                      f"{kept}/{n} ({kept / max(n, 1):.0%}) | {strict} | "
                      f"{m['scans_per_second']:.0f} |")
     lines += ["", "GOSPA / scan per seed:", "",

@@ -18,6 +18,8 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
   spell's duration is from its first to its last unseen scan, so a one-scan spell lasts 0 s).
   `strict_spells` / `strict_kept`: the same count over the spells of the scene's flag alone
   (every fully occluded run, so a glimpse splits a spell in two).
+- HOTA on positions (`occtrack.metrics.hota_points`): TrackEval's HOTA with the similarity
+  max(0, 1 - d / `cutoff`) in place of IoU (alpha 0.5: within half a metre), with DetA and AssA.
 - Identity switches: a person matched (as above, every scan) to another track than the one
   it was last matched to.
 - Scans a second: `update` calls timed with time.perf_counter, the scene simulated beforehand.
@@ -35,6 +37,7 @@ from occtrack.config.lidar import LidarSceneConfig
 from occtrack.config.scan import ScanTrackerConfig
 from occtrack.errors import OcctrackError
 from occtrack.metrics.gospa import gospa
+from occtrack.metrics.hota_points import PointTracks
 from occtrack.progress import progress
 from occtrack.scenarios.lidar import full_occlusions, simulate_scene
 from occtrack.scenarios.lidar.scene import Occlusions
@@ -63,6 +66,9 @@ class ScanRun:
     switches: int = 0  # identity switches: a person matched to another track than last time
     strict_spells: int = 0  # the spells of the scene's flag alone (a glimpse ends them)
     strict_kept: int = 0
+    hota: float = 0.0  # HOTA on positions (`metrics.hota_points`, threshold `cutoff`)
+    deta: float = 0.0
+    assa: float = 0.0
 
 
 def match(truth: np.ndarray, estimates: np.ndarray, cutoff: float) -> tuple[np.ndarray, ...]:
@@ -209,6 +215,7 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
     switches = 0
     times, ids, occluded, seen = [], [], [], []
     present: set[tuple[int, int]] = set()  # (scan, truth id) of the people in the scene
+    points = PointTracks()
     for i, s in enumerate(frames):
         start = time.perf_counter()
         out = tr.update(s.range, s.pose[2] + s.angle, s.time, s.pose[:2])
@@ -225,6 +232,7 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
             switches += before is not None and before != int(out.ids[c])
             last_track[int(tid[r])] = int(out.ids[c])
         present.update((i, int(p)) for p in tid)
+        points.add(tid, truth, out.ids, out.positions)
         times.append(np.full(len(tid), s.time))
         ids.append(tid)
         occluded.append(s.occluded[person])
@@ -238,9 +246,10 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
     strict, _, strict_kept, _, _ = count_bridged(
         full_occlusions(*rows_, scene.period), assigned, present, index, scene.rate, max_spell)
     mean = total / max(len(frames), 1)
+    h = points.score(cutoff)
     return ScanRun(seed, occlusion, len(frames), *mean, n, entered, kept, long_entered,
                    long_kept, len(frames) / max(elapsed, 1e-9), likelihood, int(switches),
-                   strict, strict_kept)
+                   strict, strict_kept, h.hota, h.deta, h.assa)
 
 
 def table(runs: list[ScanRun]) -> str:
