@@ -158,10 +158,12 @@ def format_table(result: dict, seeds: list[int], scans: int) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from occtrack.extras import require
+
+    require("trackeval", "occtrack reproduce lidar (HOTA)")  # before the run, not after
     seeds = list(dict.fromkeys(args.seeds))
     if args.figure or args.animation:  # refuse before the long run, not after
         from occtrack.experiments.scan_tracking import check_pickable
-        from occtrack.extras import require
         from occtrack.viz.frame import check_new
         from occtrack.viz.highway import check_path
 
