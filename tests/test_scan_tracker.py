@@ -231,6 +231,22 @@ def test_same_seed_same_tracks_byte_for_byte():
     assert first == digest()
 
 
+def test_report_min_confidence_reports_the_same_tracks_less_those_below_it():
+    """Reporting by confidence hides tracks from the report, never from the filter: each
+    scan's reported tracks are those of the default run whose confidence reaches the bound."""
+    from occtrack.config.lidar import LidarSceneConfig
+    from occtrack.scenarios.lidar import simulate_scene
+
+    scans = [(s.time, s.pose[2] + s.angle, s.range, s.pose[:2])
+             for s in simulate_scene(LidarSceneConfig(), 150, 2)]
+    every = ScanTracker().run(scans)
+    some = ScanTracker(ScanTrackerConfig(report_min_confidence=0.5)).run(scans)
+    kept = every.confidence >= 0.5
+    assert 0 < kept.sum() < len(every)  # the bound bites on this scene
+    for name in ("time", "id", "position", "existence", "confidence", "occluded"):
+        np.testing.assert_array_equal(getattr(some, name), getattr(every, name)[kept])
+
+
 def test_scan_settings_are_checked():
     with pytest.raises(ValueError, match="occlusion"):
         ScanTrackerConfig(occlusion="object-wise")

@@ -34,7 +34,8 @@ SCAN_RANGES = {
     "velocity_time": "(0, inf]", "coast_velocity_time": "(0, inf]", "death_rate": "[0, 1000]",
     "birth_mass": "(0, 1]", "edge_birth_mass": "(0, 1]", "initial_birth_mass": "(0, 1]",
     "edge_width": "[0, 100000]", "birth_position_std": "(0, 1000]",
-    "birth_speed_std": "(0, 1000]", "report_existence": "[0, 1]", "confirm_hits": "[1, 1000]",
+    "birth_speed_std": "(0, 1000]", "report_existence": "[0, 1]",
+    "report_min_confidence": "[0, 1]", "confirm_hits": "[1, 1000]",
     "confirm_window": "[1, 1000]", "gate_sigmas": "(0, 1000]",
 }
 
@@ -62,8 +63,12 @@ class ScanTrackerConfig:
     (`edge_birth_mass` within `edge_width` m of max_range, where people walk in;
     `initial_birth_mass` at the first scan). A Bernoulli is confirmed after `confirm_hits`
     segments in its first `confirm_window` scans, else deleted; reported while its existence
-    exceeds `report_existence`. `gate_sigmas`: a segment is looked at for a component only if
-    it lies within the disc widened by this many position standard deviations.
+    exceeds `report_existence` and its confidence (`tracker.scan`: the probability that it
+    exists and its centre is within one radius of the true one) is at least
+    `report_min_confidence` (0: every such track; 0.5: only while more likely right than not,
+    which drops hidden tracks whose position has grown uncertain). `gate_sigmas`: a segment
+    is looked at for a component only if it lies within the disc widened by this many
+    position standard deviations.
 
     Likelihood (issue 24's baselines): "derived", a segment scored by `models.scan_segments`
     (its beams jointly, and section V's closed-form term on the object's other beams);
@@ -99,6 +104,7 @@ class ScanTrackerConfig:
     birth_position_std: float = 0.1
     birth_speed_std: float = 1.0
     report_existence: float = 0.5
+    report_min_confidence: float = 0.0
     confirm_hits: int = 3
     confirm_window: int = 5
     gate_sigmas: float = 5.0

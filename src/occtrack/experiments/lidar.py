@@ -46,7 +46,8 @@ baselines in the same PMB filter, on the same scans:
 
 The table: per tracker, the mean over the seeds of GOSPA per scan (c = 1 m) with its
 localisation / missed / false parts, HOTA on positions (TrackEval's, similarity
-max(0, 1 - d / 1 m)) with DetA and AssA, identity switches a run, the full occlusions shorter than
+max(0, 1 - d / 1 m)) with DetA and AssA, the ECE of the tracks' confidence (right: a person
+within one radius), identity switches a run, the full occlusions shorter than
 2 s bridged with the same identity (of all of them, summed over the seeds; a spell lasts while
 fewer than two beams return from the person, so a one-beam glimpse, which looks like clutter,
 does not end it; the person seen on both sides), the same over every run of fully occluded
@@ -135,18 +136,19 @@ def format_table(result: dict, seeds: list[int], scans: int) -> str:
     lines = [f"Lidar walkway, seeds {' '.join(map(str, seeds))}, {scans} scans each: "
              f"{n} full occlusions under 2 s.",
              "",
-             "| tracker | GOSPA / scan (m) | loc. | missed | false | HOTA | DetA | AssA | "
+             "| tracker | GOSPA / scan (m) | loc. | missed | false | HOTA | DetA | AssA | ECE | "
              "id switches / run | bridged < 2 s | every fully occluded run < 2 s | scans/s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, runs in result.items():
         m = {f: float(np.mean([getattr(r, f) for r in runs]))
              for f in ("gospa", "localisation", "missed", "false", "hota", "deta", "assa",
-                       "switches", "scans_per_second")}
+                       "ece", "switches", "scans_per_second")}
         kept = sum(r.kept for r in runs)
         strict = f"{sum(r.strict_kept for r in runs)}/{sum(r.strict_spells for r in runs)}"
         lines.append(f"| {name} | {m['gospa']:.3f} | {m['localisation']:.3f} | "
                      f"{m['missed']:.3f} | {m['false']:.3f} | {m['hota']:.3f} | "
-                     f"{m['deta']:.3f} | {m['assa']:.3f} | {m['switches']:.1f} | "
+                     f"{m['deta']:.3f} | {m['assa']:.3f} | {m['ece']:.3f} | "
+                     f"{m['switches']:.1f} | "
                      f"{kept}/{n} ({kept / max(n, 1):.0%}) | {strict} | "
                      f"{m['scans_per_second']:.0f} |")
     lines += ["", "GOSPA / scan per seed:", "",

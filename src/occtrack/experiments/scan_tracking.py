@@ -20,6 +20,9 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
   (every fully occluded run, so a glimpse splits a spell in two).
 - HOTA on positions (`occtrack.metrics.hota_points`): TrackEval's HOTA with the similarity
   max(0, 1 - d / `cutoff`) in place of IoU (alpha 0.5: within half a metre), with DetA and AssA.
+- ECE of the tracks' confidence (`occtrack.metrics.reliability`, 10 bins): a reported track
+  is right when matched (as below) to a person within one radius of its centre, the event its
+  confidence is the probability of.
 - Identity switches: a person matched (as above, every scan) to another track than the one
   it was last matched to.
 - Scans a second: `update` calls timed with time.perf_counter, the scene simulated beforehand.
@@ -38,6 +41,7 @@ from occtrack.config.scan import ScanTrackerConfig
 from occtrack.errors import OcctrackError
 from occtrack.metrics.gospa import gospa
 from occtrack.metrics.hota_points import PointTracks
+from occtrack.metrics.reliability import reliability_table
 from occtrack.progress import progress
 from occtrack.scenarios.lidar import full_occlusions, simulate_scene
 from occtrack.scenarios.lidar.scene import Occlusions
@@ -69,6 +73,7 @@ class ScanRun:
     hota: float = 0.0  # HOTA on positions (`metrics.hota_points`, threshold `cutoff`)
     deta: float = 0.0
     assa: float = 0.0
+    ece: float = 0.0  # of the confidence: right = matched within one radius
 
 
 def match(truth: np.ndarray, estimates: np.ndarray, cutoff: float) -> tuple[np.ndarray, ...]:
@@ -216,6 +221,7 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
     times, ids, occluded, seen = [], [], [], []
     present: set[tuple[int, int]] = set()  # (scan, truth id) of the people in the scene
     points = PointTracks()
+    confidence, right = [], []
     for i, s in enumerate(frames):
         start = time.perf_counter()
         out = tr.update(s.range, s.pose[2] + s.angle, s.time, s.pose[:2])
@@ -233,6 +239,10 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
             last_track[int(tid[r])] = int(out.ids[c])
         present.update((i, int(p)) for p in tid)
         points.add(tid, truth, out.ids, out.positions)
+        near = np.zeros(len(out), bool)
+        near[match(truth, out.positions, scene.person_radius)[1]] = True
+        confidence.append(out.confidence)
+        right.append(near)
         times.append(np.full(len(tid), s.time))
         ids.append(tid)
         occluded.append(s.occluded[person])
@@ -247,18 +257,21 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
         full_occlusions(*rows_, scene.period), assigned, present, index, scene.rate, max_spell)
     mean = total / max(len(frames), 1)
     h = points.score(cutoff)
+    ece = reliability_table(np.concatenate(confidence), np.concatenate(right)).ece
     return ScanRun(seed, occlusion, len(frames), *mean, n, entered, kept, long_entered,
                    long_kept, len(frames) / max(elapsed, 1e-9), likelihood, int(switches),
-                   strict, strict_kept, h.hota, h.deta, h.assa)
+                   strict_spells=strict, strict_kept=strict_kept, hota=h.hota, deta=h.deta,
+                   assa=h.assa, ece=ece)
 
 
 def table(runs: list[ScanRun]) -> str:
     lines = ["| seed | occlusion | scans | GOSPA / scan (m) | loc. | missed | false | "
-             "full occlusions < 2 s | tracked going in | kept | of them 1-2 s: kept | scans/s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "full occlusions < 2 s | tracked going in | kept | of them 1-2 s: kept | HOTA | ECE | "
+             "scans/s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in runs:
         lines.append(f"| {r.seed} | {r.occlusion} | {r.scans} | {r.gospa:.3f} | "
                      f"{r.localisation:.3f} | {r.missed:.3f} | {r.false:.3f} | {r.spells} | "
                      f"{r.entered} | {r.kept} | {r.long_kept}/{r.long_entered} | "
-                     f"{r.scans_per_second:.0f} |")
+                     f"{r.hota:.3f} | {r.ece:.3f} | {r.scans_per_second:.0f} |")
     return "\n".join(lines)

@@ -10,9 +10,10 @@
         tracks.ids, tracks.positions, tracks.velocities, tracks.existence, tracks.occluded
 
 Objects are discs of `radius`; a reported object is a confirmed Bernoulli with existence above
-`report_existence`. `confidence` is existence times the probability that the true centre lies
-within one radius of the reported one (the centre's Gaussian taken as round, with variance
-sx sy: 1 - exp(-a^2 / (2 sx sy))).
+`report_existence` and confidence at least `report_min_confidence` (default 0: off).
+`confidence` is existence times the probability that the true centre lies within one radius
+of the reported one (the centre's Gaussian taken as round, with variance sx sy:
+1 - exp(-a^2 / (2 sx sy))).
 """
 
 from __future__ import annotations
@@ -130,14 +131,17 @@ class ScanTracker:
         r, means, sd = f.object_moments()
         shown = np.flatnonzero(f.confirmed() & (r > c.report_existence))
         shown = shown[np.argsort(f.slot_serial[shown], kind="stable")]
-        pos, vel = self.measurement.to_world(means[shown])
         s = sd[shown] / self.measurement.unit
         a = c.radius
         within = 1.0 - np.exp(-a * a / (2.0 * np.maximum(s[:, 0] * s[:, 1], 1e-12)))
+        confidence = r[shown] * within
+        keep = confidence >= c.report_min_confidence
+        shown, confidence = shown[keep], confidence[keep]
+        pos, vel = self.measurement.to_world(means[shown])
         took = f.slot_detection[shown]
         hidden = (took < 0) & (f.slot_hidden[shown] > HIDDEN_ABOVE)
-        return ScanTracks(f.slot_serial[shown].copy(), pos, vel, r[shown].copy(),
-                          r[shown] * within, hidden, took.copy())
+        return ScanTracks(f.slot_serial[shown].copy(), pos, vel, r[shown].copy(), confidence,
+                          hidden, took.copy())
 
     def run(self, scans: Iterable) -> ScanTrackResult:
         """Track every scan of `scans`: (time, world angles, ranges) or (time, angles,
