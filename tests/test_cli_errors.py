@@ -239,7 +239,7 @@ def loaded_after(argv: list[str]) -> str:
 @pytest.mark.parametrize("argv", [
     [], ["--help"], ["track", "--help"], ["eval", "--help"], ["demo", "--help"],
     ["simulate-detections", "--help"], ["foursquare", "--help"], ["lidar", "--help"],
-    ["render", "--help"],
+    ["render", "--help"], ["track-scans", "--help"],
 ])
 def test_help_and_import_load_no_heavy_module(argv):
     """Every subcommand module is imported to list it, so each must import only light modules

@@ -42,6 +42,7 @@ COMMANDS = (
     "simulate_detections",
     "sweep",
     "track",
+    "track_scans",
 )
 
 BAD_INPUT, USAGE, INTERRUPTED = 1, 2, 130

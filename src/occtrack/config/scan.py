@@ -10,7 +10,12 @@ box tracker's smallest box (4 px, `occtrack.models.box.MIN_HEIGHT`), which would
 the unit of the motion noises.
 
 Every number has a range (`SCAN_RANGES`), checked like the other tables of the schema, and a
-TOML [scan] table (`from_dict`) goes through the same `build`.
+TOML [scan] table (`from_dict`) goes through the same `build`. A scan tracker's settings file
+holds that one table (`scan_table`), e.g.
+
+    [scan]
+    occlusion = "measurement-wise"
+    max_range = 30.0
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import math
 from dataclasses import dataclass
 
 from occtrack.config import TrackerConfig, build, check_ranges
+from occtrack.errors import OcctrackError
 
 SCAN_OCCLUSION_NAMES = ("none", "measurement-wise")
 SCAN_LIKELIHOOD_NAMES = ("derived", "hand-made", "cluster")
@@ -159,3 +165,21 @@ class ScanTrackerConfig:
             confirm_window=self.confirm_window, report_existence=self.report_existence,
             report_min_confidence=0.0, gate_sigmas=self.gate_sigmas,
             birth_speed_std=self.birth_speed_std / h, inward_speed=0.0)
+
+
+def scan_table(data: dict, source: str = "configuration") -> dict:
+    """The [scan] table of a scan tracker's settings file (as TOML gives it), unchecked
+    within (`ScanTrackerConfig.from_dict` checks it); any other table or top-level setting is
+    an OcctrackError naming it and `source`."""
+    other = sorted(set(data) - {"scan"})
+    if other:
+        name = other[0]
+        if isinstance(data[name], dict):
+            raise OcctrackError(f"unknown table [{name}]; a scan tracker settings file holds "
+                                f"one [scan] table", source)
+        raise OcctrackError(f"unknown setting {name!r} outside a table; the scan tracker's "
+                            f"settings go in a [scan] table", source)
+    table = data.get("scan", {})
+    if not isinstance(table, dict):
+        raise OcctrackError(f"[scan] must be a table of settings, not {table!r}", source)
+    return dict(table)

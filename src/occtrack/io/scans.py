@@ -20,6 +20,9 @@ shape `disc` (length = width = its diameter) or `rect`; clear_beams: beams that 
 the object were it alone; visible_beams: beams whose first surface it is; occluded: 1 when
 clear_beams > 0 and visible_beams == 0 (fully occluded). sensor.csv: `time,x,y,heading`.
 
+tracks.csv (`occtrack track-scans`, `write_tracks`), one row a reported object a scan, world
+frame: `time,id,x,y,vx,vy,existence,confidence,occluded`.
+
 Reading is vectorised (numpy parses every cell at once); only when that fails are the rows
 walked one by one to name the first bad cell.
 """
@@ -32,11 +35,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from occtrack.errors import OcctrackError, opening
+from occtrack.io.atomic import atomic_write
 
 SCAN_COLUMNS = ("time", "angle", "range")
 TRUTH_COLUMNS = ("time", "id", "shape", "x", "y", "vx", "vy", "length", "width", "heading",
                  "clear_beams", "visible_beams", "occluded")
 POSE_COLUMNS = ("time", "x", "y", "heading")
+TRACK_COLUMNS = ("time", "id", "x", "y", "vx", "vy", "existence", "confidence", "occluded")
 SHAPES = ("disc", "rect")
 
 
@@ -74,6 +79,22 @@ def truth_rows(time: float, ids: np.ndarray, disc: np.ndarray, centre: np.ndarra
 def pose_row(time: float, pose: np.ndarray) -> str:
     x, y, h = pose.tolist()
     return f"{time:.6f},{x:.4f},{y:.4f},{h:.6f}\n"
+
+
+def write_tracks(path: str | os.PathLike, result, overwrite: bool = False) -> None:
+    """A scan tracker's result (`occtrack.tracker.ScanTrackResult`) as a tracks file, the
+    column names first, one row a reported object a scan in the order given: time to the
+    microsecond, positions and velocities to 0.1 mm (/s), existence and confidence to six
+    decimals, occluded 0 or 1, so one input gives the same file byte for byte. Written whole
+    or not at all (`occtrack.io.atomic`); "-" writes to standard output."""
+    rows = zip(result.time.tolist(), result.id.tolist(), result.position.tolist(),
+               result.velocity.tolist(), result.existence.tolist(),
+               result.confidence.tolist(), result.occluded.tolist(), strict=True)
+    with atomic_write(path, overwrite) as fh:
+        fh.write(",".join(TRACK_COLUMNS) + "\n")
+        fh.writelines(f"{t:.6f},{int(i)},{x:.4f},{y:.4f},{vx:.4f},{vy:.4f},{r:.6f},{c:.6f},"
+                      f"{int(h)}\n"
+                      for t, i, (x, y), (vx, vy), r, c, h in rows)
 
 
 # -- reading --------------------------------------------------------------------------------------
@@ -234,6 +255,13 @@ def read_scans(path: str | os.PathLike) -> Scans:
                  table.settings, str(path))
 
 
+def row_line(path: str | os.PathLike, columns: tuple[str, ...], row: int) -> int:
+    """The file line (1-based) of data row `row` (0-based, comments, blank lines and the
+    column names not counted) of a file read with `columns`: for an error found after the
+    read. Reads the file again, so call it on the way to an error only."""
+    return int(_table(str(path), columns, "a CSV file").line[row])
+
+
 def read_truth(path: str | os.PathLike) -> Truth:
     """A truth file (see the module docstring), checked row by row."""
     table = _table(str(path), TRUTH_COLUMNS, "a lidar truth file")
@@ -257,3 +285,42 @@ def read_poses(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     pose = np.c_[_finite(table, "x"), _finite(table, "y"), _finite(table, "heading")]
     return _time(table), pose.reshape(-1, 3)
 
+
+
+def check_beam_order(scans: Scans) -> None:
+    """OcctrackError naming the file and line of the first beam whose angle is not above the
+    one before it in its scan (a tracker takes a scan's beams in increasing angle)."""
+    bad = np.r_[False, np.diff(scans.angle) <= 0]
+    bad[scans.start[:-1]] = False  # a scan's first beam follows the last scan's last
+    rows = np.flatnonzero(bad)
+    if len(rows):
+        r = int(rows[0])
+        raise OcctrackError(f"angle {scans.angle[r]:g} is not above the beam before it "
+                            f"({scans.angle[r - 1]:g}) in the scan at time "
+                            f"{scans.time[np.searchsorted(scans.start, r, 'right') - 1]:g}: a "
+                            f"scan's beams must be in increasing angle order", scans.path,
+                            row_line(scans.path, SCAN_COLUMNS, r))
+
+
+def match_poses(scans: Scans, path: str | os.PathLike, times: np.ndarray,
+                tolerance: float = 1e-6) -> None:
+    """OcctrackError naming the pose file `path` and its first line whose time is not the
+    time of the scan at the same place (to within `tolerance` s), or the first scan it has no
+    pose for: a pose file (`read_poses`) gives one pose a scan, in the scans' order."""
+    n = min(len(times), len(scans))
+    off = np.flatnonzero(np.abs(times[:n] - scans.time[:n]) > tolerance)
+    if len(off):
+        k = int(off[0])
+        raise OcctrackError(f"time {times[k]:.6f} is not the time of scan {k + 1} of "
+                            f"{scans.path} ({scans.time[k]:.6f}); a pose file gives one pose a "
+                            f"scan, at the scan's time", str(path),
+                            row_line(path, POSE_COLUMNS, k))
+    if len(times) > n:
+        last = f", the last at {scans.time[-1]:.6f}" if len(scans) else ""
+        raise OcctrackError(f"time {times[n]:.6f} has no scan: {scans.path} holds "
+                            f"{len(scans)} scans{last}; a pose file gives one pose a scan",
+                            str(path), row_line(path, POSE_COLUMNS, n))
+    if len(scans) > n:
+        raise OcctrackError(f"no pose for scan {n + 1} of {scans.path} (time "
+                            f"{scans.time[n]:.6f}): {n} poses for {len(scans)} scans; a pose "
+                            f"file gives one pose a scan", str(path))

@@ -1,0 +1,161 @@
+"""`occtrack track-scans SCANS -o TRACKS`: the lidar scan tracker on a scan file."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from occtrack.errors import OcctrackError
+
+SCAN_OCCLUSION_NAMES = ("none", "measurement-wise")
+SCAN_LIKELIHOOD_NAMES = ("derived", "hand-made", "cluster")
+"""`occtrack.config.scan`'s names, repeated so that `--help` loads no tracker (a test keeps
+them equal)."""
+
+NAME = "track-scans"
+HELP = "track people through a 2-D lidar scan file (PMB tracker with occlusion)"
+DESCRIPTION = """\
+Track people (discs) through a 2-D lidar scan file with the scan tracker (the box tracker's
+Poisson multi-Bernoulli filter fed whole scans, occtrack.tracker.ScanTracker), and write a
+tracks file, one row a reported object a scan, in the world frame:
+
+  time,id,x,y,vx,vy,existence,confidence,occluded
+
+time s, id an integer kept by the object, position m, velocity m/s, existence the probability
+that the object is there, confidence the probability that it is there and its true centre
+within one radius of the reported one (<= existence), occluded 1 when the object was missed
+this scan and is more likely hidden than gone (never under occlusion none).
+
+SCANS is the format occtrack simulate lidar writes (occtrack.io.scans): one row a beam,
+time,angle,range: seconds, radians counter-clockwise from the sensor's heading, metres, inf
+where the beam returned nothing; the beams of a scan share its time and come in increasing
+angle; # lines are comments. Beams a scan and the scan rate come from the file (the rate
+from the median time between scans). A malformed row stops the run with the file and line.
+
+The sensor stands at the origin heading along +x unless --poses gives its pose a scan, a
+time,x,y,heading file with one row a scan at the scans' times (occtrack simulate lidar writes
+one, sensor.csv, beside scans.csv; it is used only when given). A beam's world angle is then
+its angle plus the heading, from the pose's x, y.
+
+Occlusion:
+  none              a missed person is evidence that the person is gone
+  measurement-wise  a nearer return hides a person (paper section V; the default)
+Likelihood: derived (the default; the beams of a segment jointly and the closed-form term on
+the person's other beams), hand-made (the fixed shape of the separable-likelihood trackers),
+cluster (each segment's fitted centre tracked as a point; goes with --occlusion none).
+
+--config takes a TOML file whose [scan] table holds ScanTrackerConfig settings (see
+occtrack.config.scan; the sensor's p_d, range_noise, clutter_per_scan and max_range, the
+people's radius, ...), e.g.
+  [scan]
+  occlusion = "measurement-wise"
+  max_range = 30.0
+Flags given on the command line win over the file; an unknown table or setting stops the run.
+The defaults are the simulated sensor's (20 m range, 2 cm range noise, 5 clutter returns a
+scan, P_D 0.98, people of 0.25 m radius); a return at or beyond max_range counts as no return,
+with a warning giving the count.
+
+The tracks file is written whole or not at all: to a temporary file beside it, renamed into
+place when complete, so an interrupted run leaves the old file (or none); an existing file
+is refused unless --force. -o - writes the tracks to standard output (the summary then goes
+to standard error). One input gives the same file byte for byte."""
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scans", metavar="SCANS",
+                        help="lidar scan file (time,angle,range rows; occtrack simulate "
+                             "lidar's scans.csv)")
+    parser.add_argument("-o", "--output", metavar="TRACKS", required=True,
+                        help="where to write the tracks file ('-': standard output)")
+    parser.add_argument("--poses", metavar="FILE",
+                        help="the sensor's pose a scan, time,x,y,heading rows (occtrack "
+                             "simulate lidar writes one: sensor.csv); default: at the origin, "
+                             "heading 0")
+    parser.add_argument("--occlusion", choices=SCAN_OCCLUSION_NAMES, default=None,
+                        help="occlusion model (default: measurement-wise, or the config "
+                             "file's)")
+    parser.add_argument("--likelihood", choices=SCAN_LIKELIHOOD_NAMES, default=None,
+                        help="scan likelihood (default: derived, or the config file's)")
+    parser.add_argument("--config", metavar="FILE",
+                        help="TOML file with a [scan] table of scan tracker settings")
+    parser.add_argument("--force", action="store_true", help="overwrite TRACKS")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+
+
+def build_config(args: argparse.Namespace):
+    """The tracker settings (a ScanTrackerConfig) from the config file's [scan] table and the
+    flags."""
+    from occtrack.config import load_toml
+    from occtrack.config.scan import ScanTrackerConfig, scan_table
+
+    values: dict = {}
+    source = "command line"
+    if args.config:
+        source = args.config
+        values = scan_table(load_toml(args.config), source)
+    if args.occlusion is not None:
+        values["occlusion"] = args.occlusion
+    if args.likelihood is not None:
+        values["likelihood"] = args.likelihood
+    if values.get("likelihood") == "cluster" and "occlusion" not in values:
+        raise OcctrackError("likelihood cluster (points, no beams) goes with occlusion none; "
+                            "pass --occlusion none", source)
+    return ScanTrackerConfig.from_dict(values, source)
+
+
+def world_scans(scans, poses):
+    """(time, world angles, ranges, sensor x, y) a scan; `poses` (S, 3) or None: the sensor at
+    the origin, heading 0."""
+    for i, (t, angle, ranges) in enumerate(scans):
+        if poses is None:
+            yield t, angle, ranges
+        else:
+            yield t, poses[i, 2] + angle, ranges, poses[i, :2]
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from occtrack.io.atomic import check_output
+    from occtrack.io.scans import (
+        check_beam_order,
+        match_poses,
+        read_poses,
+        read_scans,
+        write_tracks,
+    )
+    from occtrack.progress import progress, summary
+    from occtrack.tracker import ScanTracker
+
+    check_output(args.output, args.force, (args.scans, args.config, args.poses))
+    config = build_config(args)
+    scans = read_scans(args.scans)
+    check_beam_order(scans)
+    poses = None
+    if args.poses is not None:
+        times, poses = read_poses(args.poses)
+        match_poses(scans, args.poses, times)
+    if len(scans) == 0:
+        print(f"occtrack track-scans: warning: {args.scans} holds no scans, so the result has "
+              f"no tracks", file=sys.stderr)
+    far = np.isfinite(scans.range) & (scans.range >= config.max_range)
+    if far.any():
+        print(f"occtrack track-scans: warning: {args.scans}: {int(far.sum())} returns at or "
+              f"beyond max_range ({config.max_range:g} m) count as no return; set max_range "
+              f"in the --config file's [scan] table to the sensor's range", file=sys.stderr)
+    beams = int(np.median(np.diff(scans.start))) if len(scans) else 1
+    # The rate sets only the time step before the first scan (births are per scan), so a
+    # file of one scan, which has no step to infer it from, takes the tracker's default.
+    rate = 1.0 / float(np.median(np.diff(scans.time))) if len(scans) > 1 else 10.0
+    origin = (0.0, 0.0) if poses is None or len(poses) == 0 else tuple(poses[0, :2])
+    tracker = ScanTracker(config, beams=beams, rate=rate, origin=origin)
+    start = time.perf_counter()
+    result = tracker.run(progress(world_scans(scans, poses), total=len(scans),
+                                  desc=f"tracking ({config.occlusion})", quiet=args.quiet))
+    seconds = time.perf_counter() - start
+    write_tracks(args.output, result, overwrite=args.force)
+    if not args.quiet:
+        print(summary(len(scans), len(np.unique(result.id)), seconds, what="scans"),
+              file=sys.stderr if args.output == "-" else sys.stdout)
+    return 0
