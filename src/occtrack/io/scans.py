@@ -286,7 +286,6 @@ def read_poses(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     return _time(table), pose.reshape(-1, 3)
 
 
-
 def check_beam_order(scans: Scans) -> None:
     """OcctrackError naming the file and line of the first beam whose angle is not above the
     one before it in its scan (a tracker takes a scan's beams in increasing angle)."""
