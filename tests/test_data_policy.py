@@ -23,8 +23,6 @@ def test_needs_data(mot17_04_gt):
 def run_pytest(folder: Path, **env: str) -> subprocess.CompletedProcess:
     environment = {k: v for k, v in os.environ.items() if k not in ("CI", "OCCTRACK_DATA")
                    and not k.startswith(("PYTEST_", "XDIST_"))}
-    environment["PYTHONPATH"] = os.pathsep.join(
-        [str(TESTS.parent / "src"), *filter(None, [os.environ.get("PYTHONPATH")])])
     environment.update(env)
     return subprocess.run([sys.executable, "-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider",
                            "-p", "no:xdist", str(folder)], cwd=folder, env=environment,
@@ -81,8 +79,6 @@ def test_pytest_q_ends_with_the_summary_line_ci_reads():
     `pytest -qq` does not: the project's addopts must not add a -q of its own."""
     environment = {k: v for k, v in os.environ.items()
                    if not k.startswith(("PYTEST_", "XDIST_"))}
-    environment["PYTHONPATH"] = os.pathsep.join(
-        [str(TESTS.parent / "src"), *filter(None, [os.environ.get("PYTHONPATH")])])
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
                            "-p", "no:xdist", "-p", "no:randomly",
                            "tests/test_cli_errors.py::test_occlusion_names_match_the_tracker"],

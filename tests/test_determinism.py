@@ -16,15 +16,12 @@ import pytest
 
 from sequences import write_sequence
 
-SRC = Path(__file__).resolve().parents[1] / "src"
-
 
 def occtrack(args: list[str], cwd: Path, hash_seed: int) -> tuple[str, str]:
     """Run `occtrack ARGS` in a fresh interpreter in `cwd` (made here: each run writes its
     files, under the same names, into a folder of its own); its stdout and stderr."""
     cwd.mkdir()
-    env = {**os.environ, "PYTHONHASHSEED": str(hash_seed),
-           "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+    env = {**os.environ, "PYTHONHASHSEED": str(hash_seed)}  # the installed occtrack
     done = subprocess.run([sys.executable, "-m", "occtrack", *args], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr

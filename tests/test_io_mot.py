@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -397,9 +396,7 @@ def test_files_are_read_as_utf8_whatever_the_locale(tmp_path):
               "print(len(read_mot(sys.argv[1] + '/det.txt', 'det')))\n"
               "print(ascii(read_seqinfo(sys.argv[1])['name']))\n")
     env = {**os.environ, "LC_ALL": "C", "LANG": "C", "PYTHONCOERCECLOCALE": "0",
-           "PYTHONUTF8": "0", "PYTHONPATH": os.pathsep.join(
-               [str(Path(__file__).resolve().parents[1] / "src"),
-                os.environ.get("PYTHONPATH", "")])}
+           "PYTHONUTF8": "0"}
     done = subprocess.run([sys.executable, "-X", "utf8=0", "-c", script, str(tmp_path)],
                           env=env, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
