@@ -26,7 +26,7 @@ the measured edge of the cut axis then places the hidden one. (The two axes' err
 as independent, as the state's axes are.) A box cut on both axes (a corner) is left as it was.
 
 Hand-written: the update is one scalar Kalman step on a 3-state block a row, compiled
-(`occtrack.jit`) as the edge update is.
+(`occtrack.models._models`, its `_aspect.pxi`) as the edge update is.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from occtrack.jit import njit
+from occtrack.models._models import _aspect_update, _count_aspects  # noqa: F401
 
 MIN_BOXES = 10
 """Whole detections needed before the aspect ratio is used."""
@@ -60,52 +60,3 @@ class AspectPrior:
             return None
         mu = total / count
         return mu, math.sqrt(max(squares / count - mu * mu, 0.0))
-
-
-@njit
-def _count_aspects(z, observed, stats):
-    """Add log(width / height) of the detections with every edge measured to the running
-    count, sum and sum of squares `stats` (3,)."""
-    for j in range(len(z)):
-        if not (observed[j, 0, 0] and observed[j, 0, 1] and observed[j, 1, 0]
-                and observed[j, 1, 1]):
-            continue
-        width, height = z[j, 0, 1] - z[j, 0, 0], z[j, 1, 1] - z[j, 1, 0]
-        if width <= 0.0 or height <= 0.0:
-            continue
-        ratio = math.log(width / height)
-        stats[0] += 1.0
-        stats[1] += ratio
-        stats[2] += ratio * ratio
-
-
-@njit
-def _aspect_update(means, covs, rows, observed, measurement, mu, sigma):
-    """The scalar Kalman update of the module docstring, per row whose detection has one axis
-    whole and the other cut: s = means[k, cut, 2], P its block, g = P[:, 2] / S,
-    m += g (z - s), P -= g g' S."""
-    g = np.empty(3)
-    for i in range(len(rows)):
-        k, j = rows[i], measurement[i]
-        whole_x = observed[j, 0, 0] and observed[j, 0, 1]
-        whole_y = observed[j, 1, 0] and observed[j, 1, 1]
-        if whole_x == whole_y:  # nothing cut, or both axes cut
-            continue
-        whole, cut = (0, 1) if whole_x else (1, 0)
-        sign = -1.0 if cut == 1 else 1.0  # height = width exp(-mu), width = height exp(mu)
-        half = means[k, whole, 2]
-        if half <= 0.0:
-            continue
-        scale = math.exp(sign * mu)
-        value = half * scale
-        var = value * value * sigma * sigma + scale * scale * covs[k, whole, 2, 2]
-        P = covs[k, cut]
-        S = P[2, 2] + var
-        residual = value - means[k, cut, 2]
-        for a in range(3):
-            g[a] = P[a, 2] / S
-        for a in range(3):
-            means[k, cut, a] += g[a] * residual
-        for a in range(3):
-            for b in range(3):
-                P[a, b] -= g[a] * g[b] * S

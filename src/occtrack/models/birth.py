@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from occtrack.jit import njit
+from occtrack.models._models import _components
 
 
 @dataclass(frozen=True)
@@ -34,32 +34,3 @@ class EdgeBirths:
                            self.speed_std, float(edge_mass), float(spread_mass),
                            np.asarray(size_mean, dtype=float), np.asarray(size_std, dtype=float),
                            float(speed_unit))
-
-
-@njit
-def _components(extent, inward_speed, speed_std, edge_mass, spread_mass, size_mean, size_std,
-                speed_unit):
-    """`EdgeBirths.components`: every birth is centred in the image, still, of the prior's
-    size, with a standard deviation of half the image, `speed_std` and the prior's spread;
-    the edge ones then sit on their edge (spread by one half-size across it) and move inward."""
-    mass = np.full(5, edge_mass)
-    mass[4] = spread_mass
-    means, sds = np.zeros((5, 2, 3)), np.zeros((5, 2, 3))
-    for b in range(5):
-        for axis in range(2):
-            means[b, axis, 0] = extent[axis] / 2.0
-            sds[b, axis, 0] = extent[axis] / 2.0
-            sds[b, axis, 1] = speed_std * speed_unit
-            means[b, axis, 2] = size_mean[axis]
-            sds[b, axis, 2] = size_std[axis]
-    for edge in range(4):
-        axis, side = edge // 2, edge % 2
-        means[edge, axis, 0] = side * extent[axis]
-        sds[edge, axis, 0] = size_mean[axis]
-        means[edge, axis, 1] = inward_speed * speed_unit * (1 - 2 * side)
-    covs = np.zeros((5, 2, 3, 3))
-    for b in range(5):
-        for axis in range(2):
-            for r in range(3):
-                covs[b, axis, r, r] = sds[b, axis, r] ** 2
-    return mass, means, covs
