@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from occtrack.jit import njit
+from occtrack.models._models import beam_window, near_range  # noqa: F401 (compiled)
 
 TINY = 1e-12
 TURN = 2.0 * math.pi
@@ -107,32 +107,3 @@ def disc_range_gradient(origin: np.ndarray, angles: np.ndarray, centre: np.ndarr
     slope = np.divide(d, half, out=np.zeros_like(d), where=live & (half > 0))
     grad = u[:, None, :] + slope[:, :, None] * n[:, None, :]
     return np.where(live[:, :, None], grad, 0.0)
-
-
-@njit
-def beam_window(angle, low, high):
-    """The beams whose angles lie in [low, high] modulo a turn, `angle` (B,) sorted over one
-    turn: two index ranges (lo0, hi0, lo1, hi1) found by bisection, the window taken at the
-    turn of angle[0] and at the next (a window across the wrap falls in both). The compiled
-    scan kernels' one way of finding a disc's beams."""
-    base = math.floor((low - angle[0]) / TURN) * TURN
-    lo0 = np.searchsorted(angle, low - base - TURN)
-    hi0 = np.searchsorted(angle, high - base - TURN, side="right")
-    lo1 = np.searchsorted(angle, low - base + TURN - TURN)
-    hi1 = np.searchsorted(angle, high - base + TURN - TURN, side="right")
-    return lo0, hi0, lo1, hi1
-
-
-@njit
-def near_range(beam_angle, px, py, radius):
-    """The range along the beam at `beam_angle` to the near surface of the disc of `radius`
-    centred at (px, py) from the sensor: t_c - sqrt(a^2 - d^2) (`disc_interval`), or -1 where
-    the beam misses the disc or the surface is not ahead of the sensor."""
-    ux, uy = math.cos(beam_angle), math.sin(beam_angle)
-    t_c = ux * px + uy * py
-    d = -uy * px + ux * py
-    h2 = radius * radius - d * d
-    if h2 <= 0.0:
-        return -1.0
-    rho = t_c - math.sqrt(h2)
-    return rho if rho > 0.0 else -1.0

@@ -26,12 +26,9 @@ is run with occlusion "none" (q = 0) by `occtrack reproduce lidar`; the config a
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from occtrack.jit import njit
-from occtrack.models.scan_geometry import beam_window, near_range
+from occtrack.models._models import _other_beams_hand_made
 from occtrack.models.scan_segments import ScanMeasurement
 
 PASSED = 0.1  # the factor of a beam that passed through the disc
@@ -61,34 +58,3 @@ class HandMadeScanMeasurement(ScanMeasurement):
                                        z.range, z.segment_of_beam, self.radius,
                                        model.max_range, model.sigma, self.passed, self.band)
         return log_hit + other
-
-
-@njit
-def _other_beams_hand_made(centre, j, origin, angle, ranges, segment_of_beam, radius,
-                           max_range, sigma, passed, band):
-    """Per pair, sum of log f over the beams through the disc at centre[p] (at its mean)
-    that are not segment j[p]'s."""
-    P, B = len(j), len(angle)
-    out = np.zeros(P)
-    log_passed = math.log(passed)
-    for p in range(P):
-        px, py = centre[p, 0] - origin[0], centre[p, 1] - origin[1]
-        dist = math.hypot(px, py)
-        if dist <= radius or dist - radius >= max_range or B == 0:
-            continue
-        half = math.asin(radius / dist)
-        bearing = math.atan2(py, px)
-        lo0, hi0, lo1, hi1 = beam_window(angle, bearing - half, bearing + half)
-        total = 0.0
-        for w in range(2):
-            for b in range(lo0 if w == 0 else lo1, hi0 if w == 0 else hi1):
-                if segment_of_beam[b] == j[p]:
-                    continue
-                rho = near_range(angle[b], px, py, radius)
-                if rho <= 0.0:
-                    continue
-                zb = ranges[b] if ranges[b] < max_range else max_range
-                if zb - rho > band * sigma:
-                    total += log_passed
-        out[p] = total
-    return out

@@ -64,15 +64,13 @@ object sizes, a smallest size of 4 px) serve unchanged; `to_world` / `to_filter`
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import ndtr
 
-from occtrack.jit import njit
+from occtrack.models._models import _linearise, _other_beams
 from occtrack.models.beam import BeamModel
-from occtrack.models.scan_geometry import beam_window
 
 ITERATIONS = 3  # iterated EKF: linearisations a (component, segment) pair
 MAX_SLOPE = 5.0  # hit beams: |d rho / d c| across the beam at most this
@@ -211,7 +209,8 @@ class ScanMeasurement:
                  origin: np.ndarray = (0.0, 0.0)) -> Segments:
         """A scan (world angles sorted, ranges with inf for none, sensor at `origin`) as
         segments, each with the disc it fits and that fit's statistics."""
-        angle, origin = np.asarray(angle, float), np.asarray(origin, float)
+        # contiguous: the compiled kernels read the scan through pointers
+        angle, origin = np.ascontiguousarray(angle, float), np.ascontiguousarray(origin, float)
         ranges = np.where(np.asarray(ranges, float) < self.beam.max_range, ranges, np.inf)
         beam, start = cut(angle, ranges, self.beam.sigma, self.jump, self.gap)
         M = len(start) - 1
@@ -316,8 +315,8 @@ class ScanMeasurement:
         """The fit statistics (A = H'H, Hr = H'e, rr = e'e, n) of segment j[e]'s beams for a
         disc at `at[e]` (P, 2): the beams that meet it at a slope <= MAX_SLOPE, their ranges
         linearised there (rho(c) ~ rho(at) + H (c - at), e = z - rho(at))."""
-        return _linearise(np.asarray(at, float), np.asarray(j, np.int64), z.start, z.beam,
-                          z.angle, z.range, z.origin, self.radius, MAX_SLOPE)
+        return _linearise(np.ascontiguousarray(at, float), np.ascontiguousarray(j, np.int64),
+                          z.start, z.beam, z.angle, z.range, z.origin, self.radius, MAX_SLOPE)
 
     def pair_fit(self, centre: np.ndarray, cov: np.ndarray, z: Segments, j: np.ndarray):
         """Per pair (component centre (P, 2), covariance (P, 2, 2), segment j (P,)): the
@@ -487,95 +486,3 @@ class ScanBirths:
             covs[:, axis, 1, 1] = (self.speed_std * model.unit) ** 2
             covs[:, axis, 2, 2] = RADIUS_VAR
         return mass, means, covs
-
-
-@njit
-def _phi(x):
-    return 0.5 * math.erfc(-x / math.sqrt(2.0))
-
-
-@njit
-def _linearise(at, j, start, beam, angle, ranges, origin, radius, max_slope):
-    """`ScanMeasurement.linearise`, compiled: per pair, the beams of segment j[p] that meet
-    the disc at at[p] at a slope <= max_slope (`_disc_hits`), summed into A, Hr, rr, n."""
-    P = len(j)
-    A, Hr, rr, n = np.zeros((P, 2, 2)), np.zeros((P, 2)), np.zeros(P), np.zeros(P)
-    for p in range(P):
-        px, py = at[p, 0] - origin[0], at[p, 1] - origin[1]
-        for i in range(start[j[p]], start[j[p] + 1]):
-            b = beam[i]
-            ux, uy = math.cos(angle[b]), math.sin(angle[b])
-            t_c = ux * px + uy * py
-            d = -uy * px + ux * py
-            half2 = radius * radius - d * d
-            if half2 <= 0.0:
-                continue
-            half = math.sqrt(half2)
-            rho = t_c - half
-            slope = d / half
-            if rho <= 0.0 or abs(slope) > max_slope:
-                continue
-            hx, hy = ux - slope * uy, uy + slope * ux
-            e = ranges[b] - rho
-            A[p, 0, 0] += hx * hx
-            A[p, 0, 1] += hx * hy
-            A[p, 1, 0] += hy * hx
-            A[p, 1, 1] += hy * hy
-            Hr[p, 0] += hx * e
-            Hr[p, 1] += hy * e
-            rr[p] += e * e
-            n[p] += 1.0
-    return A, Hr, rr, n
-
-
-@njit
-def _other_beams(centre, cov, j, origin, angle, ranges, segment_of_beam, radius, max_range,
-                 p_d, sigma, spread):
-    """Per pair, sum over the beams that may reach the disc (centre[p], covariance cov[p])
-    and are not segment j[p]'s of log(1 - reach (1 - m)), m = 1 - P_D Phi((z - rho) / s),
-    s^2 = sigma^2 + H P H', reach = P(|d| < a) (`ScanMeasurement.component_beams` and
-    `models.scan.beam_terms`, compiled)."""
-    P, B = len(j), len(angle)
-    out = np.zeros(P)
-    for p in range(P):
-        px, py = centre[p, 0] - origin[0], centre[p, 1] - origin[1]
-        dist = math.hypot(px, py)
-        if dist - radius >= max_range or B == 0:
-            continue
-        c00, c01, c10, c11 = cov[p, 0, 0], cov[p, 0, 1], cov[p, 1, 0], cov[p, 1, 1]
-        widen = spread * math.sqrt(max(c00, c11))
-        half = math.asin(min(max((radius + widen) / max(dist, 1e-9), 0.0), 1.0))
-        bearing = math.atan2(py, px)
-        lo0, hi0, lo1, hi1 = beam_window(angle, bearing - half - 1e-9, bearing + half + 1e-9)
-        total = 0.0
-        for w in range(2):
-            for b in range(lo0 if w == 0 else lo1, hi0 if w == 0 else hi1):
-                if segment_of_beam[b] == j[p]:
-                    continue
-                ux, uy = math.cos(angle[b]), math.sin(angle[b])
-                t_c = ux * px + uy * py
-                if t_c <= 0.0:
-                    continue
-                nx, ny = -uy, ux
-                d = nx * px + ny * py
-                chord = math.sqrt(max(radius * radius - d * d, 0.0))
-                rho = t_c - chord
-                if rho <= 0.0:
-                    continue
-                lateral2 = nx * nx * c00 + nx * ny * (c01 + c10) + ny * ny * c11
-                if lateral2 > 0.0:
-                    lateral = math.sqrt(lateral2)
-                    reach = _phi((radius - d) / lateral) - _phi((-radius - d) / lateral)
-                else:
-                    reach = 1.0 if abs(d) < radius else 0.0
-                if reach <= 1e-12:
-                    continue
-                slope = d / chord if chord > 0.0 else 0.0
-                hx, hy = ux + slope * nx, uy + slope * ny
-                var = hx * hx * c00 + hx * hy * (c01 + c10) + hy * hy * c11
-                s = math.sqrt(sigma * sigma + var)
-                zb = ranges[b] if ranges[b] < max_range else max_range
-                m = 1.0 - p_d * _phi((zb - rho) / s)
-                total += math.log(1.0 - reach * (1.0 - m))
-        out[p] = total
-    return out

@@ -23,13 +23,11 @@ density moves to where it could be hidden: the moments of p(x) q(x) / q_k on the
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
 import numpy as np
 
-from occtrack.jit import njit
-from occtrack.models.scan_geometry import beam_window, near_range
+from occtrack.occlusion._occlusion import _hidden_at
 from occtrack.occlusion.base import NoOcclusion, OcclusionContext, OcclusionModel, OcclusionTerms
 
 # Gauss-Hermite (probabilists'), 5 nodes an axis: exact to degree 9. (3 nodes put 1/6 of the
@@ -73,40 +71,8 @@ class ScanMeasurementWise:
         """q of discs at known centres (K, 2): prod over the beams through each of
         P(its return would lie beyond z_b) (none reached: 0, nothing hides it)."""
         beam = model.beam
-        return _hidden_at(np.asarray(centre, float), z.origin, z.angle, z.range,
+        return _hidden_at(np.ascontiguousarray(centre, float), z.origin, z.angle, z.range,
                           beam.max_range, beam.sigma, model.radius)
-
-
-@njit
-def _hidden_at(centre, origin, angle, ranges, max_range, sigma, radius):
-    """`ScanMeasurementWise.hidden_at`, compiled: for each disc the beams inside its angular
-    span (sorted angles, by bisection, modulo a turn), the range rho to its near surface on
-    each, and the product of 1 - Phi((z_b - rho) / sigma) (z_b = max_range for no return)."""
-    K, B = len(centre), len(angle)
-    out = np.zeros(K)
-    for k in range(K):
-        px, py = centre[k, 0] - origin[0], centre[k, 1] - origin[1]
-        dist = math.hypot(px, py)
-        if dist <= radius or dist - radius >= max_range or B == 0:
-            continue
-        bearing = math.atan2(py, px)
-        half = math.asin(radius / dist)
-        lo0, hi0, lo1, hi1 = beam_window(angle, bearing - half, bearing + half)
-        log_q, reached = 0.0, False
-        for w in range(2):
-            for b in range(lo0 if w == 0 else lo1, hi0 if w == 0 else hi1):
-                rho = near_range(angle[b], px, py, radius)
-                if rho <= 0.0:
-                    continue
-                reached = True
-                zb = ranges[b] if ranges[b] < max_range else max_range
-                phi = 0.5 * math.erfc(-(zb - rho) / (sigma * math.sqrt(2.0)))
-                if phi >= 1.0:
-                    log_q = -math.inf
-                    break
-                log_q += math.log1p(-phi)
-        out[k] = math.exp(log_q) if reached else 0.0
-    return out
 
 
 SCAN_OCCLUSION_MODELS: dict[str, Callable[[], OcclusionModel]] = {
