@@ -3,7 +3,9 @@
 # Python's min/max are written out (`_min`, `_max`: the first argument unless the second is
 # strictly smaller / larger), as numba compiled them, so signed zeros and NaN come out alike.
 
-from libc.math cimport sqrt, exp, erfc
+from libc.math cimport sqrt, exp
+
+from occtrack.models._highway_sensor cimport _both_orders_c  # the sensor's two-ends term
 
 from occtrack._arrays cimport (f64, i64, b8, doubles, integers, booleans, dim, new_doubles,
                                zero_doubles, new_integers, zero_integers)
@@ -53,63 +55,6 @@ cdef inline double _max(double a, double b) noexcept nogil:
 
 cdef inline double _min(double a, double b) noexcept nogil:
     return b if b < a else a
-
-
-# ---- the measurement model's likelihood of a particle's two ends ---------------------------
-# Private copies of models/highway_sensor.py's numba `_ndtr`, `_end_term`, `_near` and
-# `_both_orders` (the kernels below call `_both_orders` per particle), so this extension stands
-# alone; to be replaced by a cimport from the models' .pxd when there is one.
-
-cdef double _SQRT_HALF = 0.7071067811865476
-cdef double _INV_SQRT_2PI = 0.3989422804014327
-
-
-cdef inline double _ndtr_c(double x) noexcept nogil:
-    """Mirrors models/highway_sensor.py's `_ndtr`: Phi(x), 1 beyond 9 and 0 below -39."""
-    if x > 9.0:
-        return 1.0
-    if x < -39.0:
-        return 0.0
-    return 0.5 * erfc(-x * _SQRT_HALF)
-
-
-cdef inline double _end_term_c(double e, double z_lo, double z_hi, bint hidden,
-                               double inv_sigma, double tail) noexcept nogil:
-    """Mirrors models/highway_sensor.py's `_end_term`: N(z; e, sigma^2) for a seen end,
-    P(e + noise in [z_lo, z_hi]) for a hidden one; 0 beyond `tail` standard deviations."""
-    cdef double lo = (z_lo - e) * inv_sigma, hi
-    if hidden:
-        hi = (z_hi - e) * inv_sigma
-        if hi < -tail or lo > tail:
-            return 0.0
-        return _ndtr_c(hi) - _ndtr_c(lo)
-    if lo * lo > tail * tail:
-        return 0.0
-    return exp(-0.5 * lo * lo) * _INV_SQRT_2PI * inv_sigma
-
-
-cdef inline bint _near_c(double e, double z_lo, double z_hi, bint hidden, double inv_sigma,
-                         double tail) noexcept nogil:
-    """Mirrors models/highway_sensor.py's `_near`: whether `_end_term` is computed."""
-    cdef double lo = (z_lo - e) * inv_sigma
-    if hidden:
-        return not ((z_hi - e) * inv_sigma < -tail or lo > tail)
-    return not lo * lo > tail * tail
-
-
-cdef inline double _both_orders_c(double lo, double hi, double zl0, double zl1, bint lh,
-                                  double zr0, double zr1, bint rh, double inv,
-                                  double tail) noexcept nogil:
-    """Mirrors models/highway_sensor.py's `_both_orders`: p(z | ends lo, hi) summed over the
-    two orders of the two ends, a product computed only where both its ends are near."""
-    cdef double total = 0.0
-    if _near_c(lo, zl0, zl1, lh, inv, tail) and _near_c(hi, zr0, zr1, rh, inv, tail):
-        total += _end_term_c(lo, zl0, zl1, lh, inv, tail) * _end_term_c(hi, zr0, zr1, rh, inv,
-                                                                         tail)
-    if _near_c(hi, zl0, zl1, lh, inv, tail) and _near_c(lo, zr0, zr1, rh, inv, tail):
-        total += _end_term_c(hi, zl0, zl1, lh, inv, tail) * _end_term_c(lo, zr0, zr1, rh, inv,
-                                                                         tail)
-    return total
 
 
 # ---- the kernels -------------------------------------------------------------------------------
