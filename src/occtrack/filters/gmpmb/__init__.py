@@ -89,10 +89,11 @@ models give none, and the miss child keeps its parent's density.
 Hand-written: no maintained library offers a labelled Gaussian-mixture PMB filter with a
 pluggable miss term. The loops over components, pairs and cells and the bookkeeping between
 them (the `_`-prefixed functions of this package's modules: `labels`, `pool`, `prediction`,
-`weights`, `children`) are compiled (`occtrack.jit`): a frame is too small for numpy's
-per-call overhead to pay off. Each reproduces the numpy expression it replaced to the last bit
-(tests/test_kernels.py, tests/test_update_kernels.py); where numpy and the C library round
-differently (a power), numpy computes it.
+`weights`, `children`) are compiled (Cython: the package's one extension `_gmpmb`, its
+source one `.pxi` per module): a frame is too small for numpy's per-call overhead to pay off.
+Each reproduces the numpy expression it replaced to the last bit (tests/test_kernels.py,
+tests/test_update_kernels.py); where numpy and the C library round differently (a power),
+numpy computes it.
 """
 
 from __future__ import annotations
@@ -173,7 +174,7 @@ class GaussianMixturePMB:
         self._use_dt(c.dt)
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
         # the survival region: components whose centre leaves it take exit_survival
-        self.image_size = np.asarray(measurement.region_size, dtype=float)
+        self.image_size = np.ascontiguousarray(measurement.region_size, dtype=float)
         cap = c.capacity or INITIAL_POOL
         L = c.max_labels or INITIAL_SLOTS
         self.n = 0
@@ -203,7 +204,8 @@ class GaussianMixturePMB:
         self.iterations = 0  # loopy BP iterations of the last step
         # running sums of detected half-sizes (count, sum, sum of squares) for the birth prior
         self._size_stats = np.zeros((3, 2))
-        self._size_settings = tuple(np.zeros(0) if value is None else np.asarray(value, float)
+        self._size_settings = tuple(np.zeros(0) if value is None else
+                                    np.ascontiguousarray(value, dtype=float)
                                     for value in (c.birth_half_size, c.birth_half_size_std))
         self._warned: set[str] = set()  # hard limits already reported
 
@@ -288,6 +290,8 @@ class GaussianMixturePMB:
             self.move_image(*camera)
         self._predict()
         self._add_births(z, observed)
+        if classes is not None:  # (the kernels read int64)
+            classes = np.ascontiguousarray(classes, dtype=np.int64)
         self._update(z, observed, scores, classes)
         self.steps += 1
 
@@ -317,9 +321,10 @@ class GaussianMixturePMB:
         centres move, velocities and half-sizes scale, covariances scale by scale^2. An
         uncertain shift (its variance per axis, px^2) widens every centre by that variance."""
         n = self.n
-        variance = np.zeros(2) if shift_variance is None else np.asarray(shift_variance, float)
-        _move_in_place(self.mean[:n], self.cov[:n], np.asarray(scale, dtype=float),
-                       np.asarray(shift, dtype=float), variance)
+        variance = np.zeros(2) if shift_variance is None else np.ascontiguousarray(
+            shift_variance, dtype=float)
+        _move_in_place(self.mean[:n], self.cov[:n], np.ascontiguousarray(scale, dtype=float),
+                       np.ascontiguousarray(shift, dtype=float), variance)
 
     def _predict(self) -> None:
         n = self.n
@@ -343,7 +348,9 @@ class GaussianMixturePMB:
     def _add_births(self, z=None, observed=None) -> None:
         c = self.config
         if self.birth_model is not None:
-            mass, means, covs = self.birth_model.components(z, observed, self.dt, self.steps)
+            # (a plugin's arrays: the kernels read C-contiguous float64)
+            mass, means, covs = (np.ascontiguousarray(a, dtype=float) for a in
+                                 self.birth_model.components(z, observed, self.dt, self.steps))
         else:
             spread = c.spread_birth_rate * self.dt + (c.initial_objects if self.steps == 0
                                                       else 0.0)
@@ -375,10 +382,13 @@ class GaussianMixturePMB:
                                existence=r_slot, measurements=z,
                                measurement_model=self.measurement)
         terms = self.occlusion.terms(ctx)
-        v, q, pd, miss = _miss_terms(det, occ, terms.visible, terms.hidden)
+        # (the occlusion model's and the measurement model's arrays are a plugin's: the
+        # kernels read C-contiguous float64)
+        v, q, pd, miss = _miss_terms(det, occ, np.ascontiguousarray(terms.visible, dtype=float),
+                                     np.ascontiguousarray(terms.hidden, dtype=float))
 
         seen_hidden = np.zeros(M) if terms.seen_hidden is None else _clipped(
-            terms.seen_hidden, 0.0, 1.0)
+            np.ascontiguousarray(terms.seen_hidden, dtype=float), 0.0, 1.0)
         # objects: rows 0..A-1 are the used slots, row A the Poisson part; components are
         # sorted by label, so each object's sums are sums over one contiguous run
         slots, rows = _object_rows(label, self.slot_used)
@@ -395,7 +405,8 @@ class GaussianMixturePMB:
             v, seen_hidden, pd, bool(seen_hidden.any()), label, self.slot_class,
             NO_CLASSES if classes is None else classes)
 
-        clutter = self.measurement.clutter_density(z, observed, scores)
+        clutter = np.ascontiguousarray(self.measurement.clutter_density(z, observed, scores),
+                                       dtype=float)
         # an edge with L_ij < EDGE_FLOOR miss_i w_new_j has p_hit_ij below EDGE_FLOOR (nu_ij
         # <= 1 / w_new_j), so its hit children are below prune_mass whatever BP says; leaving
         # such edges out (gating) splits a crowd's graph into the clusters that really compete
@@ -456,7 +467,8 @@ class GaussianMixturePMB:
         zhat, S = self.measurement.innovation(mean, cov)
         if not c.gating or n * M <= DENSE_PAIRS:
             pk, pj, cand = _all_pairs(n, M, rows, A)
-            return pk, pj, self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), cand
+            loglik = self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj)
+            return pk, pj, np.ascontiguousarray(loglik, dtype=float), cand
         gates = self.measurement.gates(zhat, S, c.gate_sigmas)
         first = np.ones(n, dtype=bool)
         first[1:] = (rows[1:] != rows[:-1]) | (rows[1:] == A)
@@ -465,12 +477,14 @@ class GaussianMixturePMB:
         unit_gates = np.stack([np.minimum.reduceat(gates[..., 0], start),
                                np.maximum.reduceat(gates[..., 1], start)], axis=-1)
         ui, uj = overlapping_pairs(unit_gates, self.measurement.gate_boxes(z, observed))
+        uj = np.ascontiguousarray(uj)  # (np.nonzero's columns are strided; a kernel reads it)
         count = size[ui]
         total = int(count.sum())
         cand_of_pair = np.repeat(np.arange(len(ui)), count)
         pk = np.repeat(start[ui] - (np.cumsum(count) - count), count) + np.arange(total)
         pj = uj[cand_of_pair]
-        loglik = self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj)
+        loglik = np.ascontiguousarray(
+            self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj), dtype=float)
         return pk, pj, loglik, (rows[start[ui]], uj, cand_of_pair)
 
     def _count_detections(self, slots: np.ndarray, row: np.ndarray, col: np.ndarray,
