@@ -7,14 +7,13 @@ labels, DETR). `Tracker.update` takes and returns any of them.
 
 from __future__ import annotations
 
-import math
 import numbers
 from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
 
-from occtrack.jit import njit
+from occtrack.tracker._tracker import _checked_ltwh
 
 BoxFormat = Literal["xyxy", "ltwh", "cxcywh"]
 BOX_FORMATS: tuple[str, ...] = ("xyxy", "ltwh", "cxcywh")
@@ -129,24 +128,7 @@ def checked_frame(boxes: object, scores: object) -> np.ndarray | None:
     if (type(boxes) is np.ndarray and boxes.dtype == np.float64 and boxes.ndim == 2
             and boxes.shape[1] == 4 and type(scores) is np.ndarray
             and scores.dtype == np.float64 and scores.shape == (len(boxes),)):
-        ok, out = _checked_ltwh(boxes, scores)
+        ok, out = _checked_ltwh(np.ascontiguousarray(boxes), np.ascontiguousarray(scores))
         if ok:
             return out
     return None
-
-
-@njit
-def _checked_ltwh(boxes, scores):
-    """(all finite and no size negative, the boxes with sizes floored at 1 px)."""
-    out = np.empty((len(boxes), 4))
-    for j in range(len(boxes)):
-        if not math.isfinite(scores[j]):
-            return False, out
-        for c in range(4):
-            if not math.isfinite(boxes[j, c]):
-                return False, out
-        if boxes[j, 2] < 0.0 or boxes[j, 3] < 0.0:
-            return False, out
-        out[j, 0], out[j, 1] = boxes[j, 0], boxes[j, 1]
-        out[j, 2], out[j, 3] = max(boxes[j, 2], 1.0), max(boxes[j, 3], 1.0)
-    return True, out

@@ -32,12 +32,12 @@ import numpy.typing as npt
 from occtrack.config import TrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.io.mot import MotTable
-from occtrack.jit import njit
 from occtrack.models.box import edges_from_ltwh
 from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.occlusion.boxes import box_occlusion
 from occtrack.progress import progress
+from occtrack.tracker._tracker import _report_rows, _reported
 from occtrack.tracker.boxes import (
     BoxFormat,
     as_array,
@@ -401,76 +401,3 @@ def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np
             raise ValueError(f"frame {index + 1}: detections must be (M, 4) or (M, 5), "
                              f"not {arr.shape}")
         yield arr[:, :4], (arr[:, 4] if arr.shape[1] == 5 else None)
-
-
-@njit
-def _report_rows(shown, r, means, took, detections, hidden, classes, occluded_above, border):
-    """The `Tracks` fields after the ids, for the slots `shown`: boxes (the detection's
-    when one was taken, else the state's), existence, velocities, detection index, class and
-    whether occlusion (probability above `occluded_above`) explains a miss. A detection's
-    edge on the image border (`border`: (2, 2) per axis the lowest and highest measured
-    coordinate) is where the image ends, not the person: the state's edge is reported there
-    when it lies farther out (the detector clips, the true box runs on)."""
-    K = len(shown)
-    boxes, velocities = np.empty((K, 4)), np.empty((K, 2))
-    existence, index = np.empty(K), np.empty(K, dtype=np.int64)
-    cls, occluded = np.empty(K, dtype=classes.dtype), np.zeros(K, dtype=np.bool_)
-    for a in range(K):
-        k = shown[a]
-        existence[a], index[a], cls[a] = r[k], took[k], classes[k]
-        for axis in range(2):
-            velocities[a, axis] = means[k, axis, 1]
-            boxes[a, axis] = means[k, axis, 0] - means[k, axis, 2]
-            boxes[a, 2 + axis] = 2.0 * means[k, axis, 2]
-        if took[k] >= 0:
-            for axis in range(2):  # (a detection off the border is copied exactly)
-                lo, size = detections[took[k], axis], detections[took[k], 2 + axis]
-                state_lo, state_hi = boxes[a, axis], boxes[a, axis] + boxes[a, 2 + axis]
-                if lo <= border[axis, 0] and state_lo < lo:
-                    lo, size = state_lo, size + (lo - state_lo)
-                if lo + size >= border[axis, 1] and state_hi > lo + size:
-                    size = state_hi - lo
-                boxes[a, axis], boxes[a, 2 + axis] = lo, size
-        else:
-            occluded[a] = hidden[k] > occluded_above
-    return boxes, existence, velocities, index, cls, occluded
-
-
-@njit
-def _reported(r, means, centre_std, used, took, coast, serial, reported_serial, report_id,
-              next_id, min_existence, coast_time, max_centre_std):
-    """`Tracker.tracks`' rule, slot by slot: (the slots reported now in id order, the next
-    free id). A slot reported for the first time since it got its serial (a new object in
-    it) gets the next ids, in image order (centre x, then y), written into `report_id` and
-    `reported_serial` in place."""
-    L = len(r)
-    shown = np.empty(L, np.int64)
-    n = 0
-    fresh = 0
-    for k in range(L):
-        if not used[k] or not r[k] > min_existence:
-            continue
-        if took[k] < 0:
-            height = max(2.0 * means[k, 1, 2], 1.0)
-            if not (coast[k] <= coast_time + 1e-9 and centre_std[k, 0] < max_centre_std * height
-                    and centre_std[k, 1] < max_centre_std * height):
-                continue
-        shown[n] = k
-        n += 1
-        if reported_serial[k] != serial[k]:
-            fresh += 1
-    shown = shown[:n]
-    if fresh:
-        new = np.empty(fresh, np.int64)
-        i = 0
-        for k in shown:
-            if reported_serial[k] != serial[k]:
-                new[i] = k
-                i += 1
-        by_y = np.argsort(means[new, 1, 0], kind="mergesort")
-        by_x = np.argsort(means[new[by_y], 0, 0], kind="mergesort")
-        new = new[by_y[by_x]]
-        for i in range(fresh):
-            report_id[new[i]] = next_id + i
-            reported_serial[new[i]] = serial[new[i]]
-    return shown[np.argsort(report_id[shown])], next_id + fresh

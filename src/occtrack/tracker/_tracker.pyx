@@ -1,0 +1,107 @@
+# cython: language_level=3
+"""Compiled kernels of occtrack.tracker (issue 23), one source per module they serve:
+
+* `_boxes.pxi`: boxes.py's fast check of a detector's frame (`_checked_ltwh`);
+* `_camera.pxi`: camera.py's camera shift and expansion from the detections (`_camera_dense`,
+  `_estimate_dense`, `_candidates`, `_mutual_shifts`, `_mode_shift`, `_votes`, ...);
+* `_confidence.pxi`: confidence.py's confidence of a reported box (`box_covariances`,
+  `_report_confidence`, `_overlap_probability`, ...);
+* `_tracker_rows.pxi`: tracker.py's reporting rule and rows (`_reported`, `_report_rows`).
+
+The maths and the calls are in those modules, which import the kernels from here under the
+same names. Each kernel is written as its numba loop read: arrays are C pointers, 2-d and 3-d
+indexed by hand, each sum taken in the same order (no fused multiply-add, no reassociation),
+so the numbers are the same to the last bit. A `def` entry checks each array once (dtype,
+dimensions, C order: `occtrack._arrays`) and hands pointers to `cdef` code; kernels that call
+kernels call the `cdef` versions.
+
+Two pieces are C written here, for speed, exact by construction: Python's max and min of two
+numbers as SSE2's maxsd / minsd (gcc branches on max(x, 0.0) otherwise), and the draw loop of
+`_overlap_probability` with the two image axes as the two lanes of one SSE2 register (numba's
+AVX code packed them so); each has the plain C form beside it for a machine without SSE2, and
+both give numba's numbers to the bit.
+"""
+
+cimport numpy as cnp
+from libc.math cimport fabs, floor, isfinite, sqrt
+
+from occtrack._arrays cimport (
+    argsort_stable,
+    argsort_stable_i64,
+    b8,
+    booleans,
+    dim,
+    doubles,
+    f64,
+    i64,
+    integers,
+    new_booleans,
+    new_doubles,
+    new_integers,
+    zero_booleans,
+    zero_doubles,
+    zero_integers,
+)
+
+import numpy as np
+
+cnp.import_array()
+
+
+# ---- Python's max and min of two numbers, as numba's builtins (the first unless the second
+# is strictly larger / smaller: NaN handling as there). On x86-64 SSE2's maxsd / minsd, which
+# are exactly that (gcc otherwise branches on max(x, 0.0), and the branch is a coin toss in
+# the overlap loops) -----------------------------------------------------------------------
+
+cdef extern from *:
+    """
+    #if defined(__SSE2__)
+    #include <emmintrin.h>
+    /* maxsd(x, y) = x > y ? x : y and minsd(x, y) = x < y ? x : y, to the bit */
+    static inline double occtrack_dmax(double a, double b) {
+        return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(b), _mm_set_sd(a)));
+    }
+    static inline double occtrack_dmin(double a, double b) {
+        return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(b), _mm_set_sd(a)));
+    }
+    #else
+    static inline double occtrack_dmax(double a, double b) { return b > a ? b : a; }
+    static inline double occtrack_dmin(double a, double b) { return b < a ? b : a; }
+    #endif
+    """
+    double dmax "occtrack_dmax"(double a, double b) noexcept nogil
+    double dmin "occtrack_dmin"(double a, double b) noexcept nogil
+
+
+cdef inline i64 imax(i64 a, i64 b) noexcept nogil:
+    return b if b > a else a
+
+
+cdef inline i64 imin(i64 a, i64 b) noexcept nogil:
+    return b if b < a else a
+
+
+# ---- the data of checked arrays, and a check of lengths -----------------------------------
+
+cdef inline f64* fdata(object a) noexcept:
+    return <f64*>cnp.PyArray_DATA(<cnp.ndarray>a)
+
+
+cdef inline i64* idata(object a) noexcept:
+    return <i64*>cnp.PyArray_DATA(<cnp.ndarray>a)
+
+
+cdef inline b8* bdata(object a) noexcept:
+    return <b8*>cnp.PyArray_DATA(<cnp.ndarray>a)
+
+
+cdef int same_length(Py_ssize_t n, Py_ssize_t expected, str name) except -1:
+    if n != expected:
+        raise ValueError(f"{name}: {expected} rows are needed, not {n}")
+    return 0
+
+
+include "_boxes.pxi"
+include "_camera.pxi"
+include "_confidence.pxi"
+include "_tracker_rows.pxi"
