@@ -3,7 +3,8 @@
 Simulates the highway once (measurement-wise sensor, seed 1), keeps the scans, then times each
 tracker alone over the same steps (default 10,000, the paper's run length). Issue 10's budget
 is 8 s for 10,000 steps of one tracker; the authors' prototype needs about 300 s. Each tracker
-first runs 50 steps untimed, which compiles its numba loops (or loads them from the cache).
+first runs 50 steps untimed (its compiled loops arrive built with the install; the warm-up
+fills the caches).
 
     python benchmarks/bench_highway.py [--steps 10000] [--sensor measurement-wise] [--repeats 3]
 

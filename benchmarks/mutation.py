@@ -47,8 +47,8 @@ EQUIVALENT = ROOT / "benchmarks" / "mutation_equivalent.md"
 # sensor model and occlusion handlers and the detector calibration are groups of their own. The
 # highway's loops are compiled kernels (no mutants), so its group mutates the Python around
 # them, checked by the kernels' bit-for-bit comparison with numpy, the tracker's and
-# simulator's tests and tests/test_highway_mutants.py; numba's cache (written in the work
-# directory on the first run) keeps each mutant's tests to seconds.
+# simulator's tests and tests/test_highway_mutants.py. The compiled kernels (the _*.pyx) are
+# no Python for mutmut: build them in place first (occtrack's src/ then imports them).
 BOX_MODELS = [f"src/occtrack/models/{name}.py" for name in ("birth", "box", "markov", "motion")]
 # the box tracker's occlusion models (the highway's, extents.py and highway.py, go with it)
 BOX_OCCLUSION = ("base", "boxes", "box_geometry", "box_measurementwise", "box_objectwise")

@@ -1,4 +1,4 @@
-"""The filter's compiled loops (numba, `occtrack.jit`) against plain numpy written here.
+"""The filter's compiled loops (Cython, `filters/gmpmb/_gmpmb.pyx`) against plain numpy.
 
 Each kernel of `occtrack.filters.gmpmb` replaced array code; these tests hold it to what that
 code computed, on random input that takes every branch (mixed labels, coasting and not,

@@ -14,8 +14,8 @@ units a user cares about.
 - ECE: the expected calibration error of `Tracks.confidence` over the reported boxes, a box
   right when matched (`occtrack.metrics.reliability`, as `occtrack eval --calibration`).
 - steps / s: frames tracked per second, the time inside `Tracker.step` only, after a warm-up
-  run over the same frames on a tracker of the same settings (every kernel the run needs is
-  compiled by then, whether numba's cache was warm or cold): the steady state, measured as
+  run over the same frames on a tracker of the same settings (caches and allocations warm
+  by then; the kernels arrive compiled with the install): the steady state, measured as
   benchmarks/bench_tracker.py measures it.
 """
 
