@@ -1,0 +1,177 @@
+# cython: language_level=3
+"""The crossing between Python and the compiled kernels (issue 23), shared by every
+extension of occtrack: an argument array is checked once (dtype, dimensions, C order) and
+read through a pointer; new arrays are made with numpy's C API. Inline, so nothing is
+linked between extensions.
+
+    from occtrack._arrays cimport f64, i64, b8, doubles, integers, booleans, dim
+    cdef f64* x = doubles(a, 2, "a")      # a: C-contiguous float64, 2-d; x[i * dim(a, 1) + j]
+    out = new_doubles(1, n)               # numpy.empty(n)
+"""
+
+cimport numpy as cnp
+
+ctypedef cnp.float64_t f64
+ctypedef cnp.int64_t i64
+ctypedef cnp.npy_bool b8
+
+
+cdef inline void* _data(object a, int typenum, int ndim, str name, str kind) except NULL:
+    if not cnp.PyArray_Check(a):
+        raise TypeError(f"{name}: a numpy array is needed, not {type(a).__name__}")
+    cdef cnp.ndarray arr = <cnp.ndarray>a
+    if (cnp.PyArray_TYPE(arr) != typenum or cnp.PyArray_NDIM(arr) != ndim
+            or not cnp.PyArray_IS_C_CONTIGUOUS(arr)):
+        raise TypeError(f"{name}: a C-contiguous {ndim}-d {kind} array is needed, not "
+                        f"{arr.dtype} {arr.ndim}-d"
+                        f"{'' if cnp.PyArray_IS_C_CONTIGUOUS(arr) else ' (not contiguous)'}")
+    return cnp.PyArray_DATA(arr)
+
+
+cdef inline f64* doubles(object a, int ndim, str name) except NULL:
+    """a's data, if a is a C-contiguous float64 array of `ndim` dimensions."""
+    return <f64*>_data(a, cnp.NPY_FLOAT64, ndim, name, "float64")
+
+
+cdef inline i64* integers(object a, int ndim, str name) except NULL:
+    """a's data, if a is a C-contiguous int64 array of `ndim` dimensions."""
+    return <i64*>_data(a, cnp.NPY_INT64, ndim, name, "int64")
+
+
+cdef inline b8* booleans(object a, int ndim, str name) except NULL:
+    """a's data, if a is a C-contiguous bool array of `ndim` dimensions."""
+    return <b8*>_data(a, cnp.NPY_BOOL, ndim, name, "bool")
+
+
+cdef inline Py_ssize_t dim(object a, int axis) noexcept:
+    """The length of (checked) array a along `axis`."""
+    return cnp.PyArray_DIM(<cnp.ndarray>a, axis)
+
+
+cdef inline cnp.ndarray _new(int typenum, int ndim, Py_ssize_t n0, Py_ssize_t n1,
+                             Py_ssize_t n2, bint zero):
+    cdef cnp.npy_intp shape[3]
+    shape[0] = n0
+    shape[1] = n1
+    shape[2] = n2
+    if zero:
+        return cnp.PyArray_ZEROS(ndim, shape, typenum, 0)
+    return cnp.PyArray_EMPTY(ndim, shape, typenum, 0)
+
+
+cdef inline cnp.ndarray new_doubles(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
+                                    Py_ssize_t n2=0):
+    """numpy.empty((n0[, n1[, n2]])) of float64."""
+    return _new(cnp.NPY_FLOAT64, ndim, n0, n1, n2, False)
+
+
+cdef inline cnp.ndarray zero_doubles(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
+                                     Py_ssize_t n2=0):
+    """numpy.zeros((n0[, n1[, n2]])) of float64."""
+    return _new(cnp.NPY_FLOAT64, ndim, n0, n1, n2, True)
+
+
+cdef inline cnp.ndarray new_integers(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
+                                     Py_ssize_t n2=0):
+    return _new(cnp.NPY_INT64, ndim, n0, n1, n2, False)
+
+
+cdef inline cnp.ndarray zero_integers(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
+                                      Py_ssize_t n2=0):
+    return _new(cnp.NPY_INT64, ndim, n0, n1, n2, True)
+
+
+cdef inline cnp.ndarray new_booleans(int ndim, Py_ssize_t n0, Py_ssize_t n1=0):
+    return _new(cnp.NPY_BOOL, ndim, n0, n1, 0, False)
+
+
+cdef inline cnp.ndarray zero_booleans(int ndim, Py_ssize_t n0, Py_ssize_t n1=0):
+    return _new(cnp.NPY_BOOL, ndim, n0, n1, 0, True)
+
+
+cdef inline void argsort_stable(const f64* key, Py_ssize_t n, i64* order,
+                                i64* work) noexcept nogil:
+    """order = numpy.argsort(key[:n], kind="stable") (NaN keys last), by a bottom-up merge
+    sort of indices; `work` holds n int64. A stable sort has one answer, so this equals
+    numba's and numpy's mergesort to the index."""
+    cdef Py_ssize_t i, width, lo, mid, hi, a, b, k
+    cdef i64* src = order
+    cdef i64* dst = work
+    cdef i64* tmp
+    for i in range(n):
+        order[i] = i
+    width = 1
+    while width < n:
+        lo = 0
+        while lo < n:
+            mid = lo + width if lo + width < n else n
+            hi = lo + 2 * width if lo + 2 * width < n else n
+            a, b, k = lo, mid, lo
+            while a < mid and b < hi:
+                # take from the right only when strictly smaller (stability); NaN is largest
+                if key[src[b]] < key[src[a]] or (key[src[a]] != key[src[a]]
+                                                 and key[src[b]] == key[src[b]]):
+                    dst[k] = src[b]
+                    b += 1
+                else:
+                    dst[k] = src[a]
+                    a += 1
+                k += 1
+            while a < mid:
+                dst[k] = src[a]
+                a += 1
+                k += 1
+            while b < hi:
+                dst[k] = src[b]
+                b += 1
+                k += 1
+            lo = hi
+        tmp = src
+        src = dst
+        dst = tmp
+        width *= 2
+    if src != order:
+        for i in range(n):
+            order[i] = src[i]
+
+
+cdef inline void argsort_stable_i64(const i64* key, Py_ssize_t n, i64* order,
+                                    i64* work) noexcept nogil:
+    """order = numpy.argsort(key[:n], kind="stable") for int64 keys (as `argsort_stable`)."""
+    cdef Py_ssize_t i, width, lo, mid, hi, a, b, k
+    cdef i64* src = order
+    cdef i64* dst = work
+    cdef i64* tmp
+    for i in range(n):
+        order[i] = i
+    width = 1
+    while width < n:
+        lo = 0
+        while lo < n:
+            mid = lo + width if lo + width < n else n
+            hi = lo + 2 * width if lo + 2 * width < n else n
+            a, b, k = lo, mid, lo
+            while a < mid and b < hi:
+                if key[src[b]] < key[src[a]]:
+                    dst[k] = src[b]
+                    b += 1
+                else:
+                    dst[k] = src[a]
+                    a += 1
+                k += 1
+            while a < mid:
+                dst[k] = src[a]
+                a += 1
+                k += 1
+            while b < hi:
+                dst[k] = src[b]
+                b += 1
+                k += 1
+            lo = hi
+        tmp = src
+        src = dst
+        dst = tmp
+        width *= 2
+    if src != order:
+        for i in range(n):
+            order[i] = src[i]
