@@ -17,14 +17,15 @@ Boxes are edge arrays (..., 2, 2): [axis, low/high], axis 0 horizontal and 1 ver
 Overlap is strict (boxes that only touch do not overlap). Written here because scipy's trees
 answer distance queries between points, not overlap queries between boxes of many sizes. The
 test of the candidates is compiled (`_sweep`): in a crowd they are a few thousand a frame, and
-the array form made each of them pass through a dozen temporary arrays.
+the array form made each of them pass through a dozen temporary arrays. `_sweep` is in
+`occtrack/_occtrack.pyx`, the package's own extension.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from occtrack.jit import njit
+from occtrack._occtrack import _sweep  # compiled: _occtrack.pyx
 
 DENSE_PAIRS = 4096  # at most this many pairs: test them all at once
 
@@ -60,9 +61,10 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         return empty, empty
     if N * M <= (DENSE_PAIRS if dense_pairs is None else dense_pairs):
         return _dense(a, b)
-    a_x0, a_x1 = np.ascontiguousarray(a[:, 0, 0]), np.ascontiguousarray(a[:, 0, 1])
-    a_y0, a_y1 = np.ascontiguousarray(a[:, 1, 0]), np.ascontiguousarray(a[:, 1, 1])
-    b_x0, b_x1 = np.ascontiguousarray(b[:, 0, 0]), np.ascontiguousarray(b[:, 0, 1])
+    # (float64 in C order: `_sweep` reads them in place)
+    a_x0, a_x1 = np.ascontiguousarray(a[:, 0, 0], float), np.ascontiguousarray(a[:, 0, 1], float)
+    a_y0, a_y1 = np.ascontiguousarray(a[:, 1, 0], float), np.ascontiguousarray(a[:, 1, 1], float)
+    b_x0, b_x1 = np.ascontiguousarray(b[:, 0, 0], float), np.ascontiguousarray(b[:, 0, 1], float)
     width = b_x1 - b_x0
     typical = float(np.partition(width, M // 2)[M // 2])
     wide = width > 4.0 * typical + 1e-9
@@ -76,8 +78,8 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         widest = float(width[normal].max())
         start = np.searchsorted(low, a_x0 - widest, side="left")
         stop = np.searchsorted(low, a_x1, side="left")
-        i, j = _sweep(a_x0, a_y0, a_y1, s_x1, np.ascontiguousarray(s_y0),
-                      np.ascontiguousarray(s_y1), order, start, stop)
+        i, j = _sweep(a_x0, a_y0, a_y1, s_x1, np.ascontiguousarray(s_y0, float),
+                      np.ascontiguousarray(s_y1, float), order, start, stop)
         i_parts.append(i)
         j_parts.append(j)
     if wide.any():
@@ -87,21 +89,3 @@ def overlapping_pairs(a: np.ndarray, b: np.ndarray,
         j_parts.append(w[jj])
     # (the box of median width is never wide, so the sweep always contributes a part)
     return np.concatenate(i_parts), np.concatenate(j_parts)
-
-
-@njit
-def _sweep(a_x0, a_y0, a_y1, s_x1, s_y0, s_y1, order, start, stop):
-    """The pairs (i, order[k]) with k in [start[i], stop[i]) whose boxes overlap (below stop,
-    the low x edge is below the high one of box i), i ascending, then k."""
-    total = 0
-    for i in range(len(start)):
-        total += max(stop[i] - start[i], 0)
-    out_i = np.empty(total, dtype=np.int64)
-    out_j = np.empty(total, dtype=np.int64)
-    found = 0
-    for i in range(len(start)):
-        for k in range(start[i], stop[i]):
-            if a_x0[i] < s_x1[k] and a_y0[i] < s_y1[k] and s_y0[k] < a_y1[i]:
-                out_i[found], out_j[found] = i, order[k]
-                found += 1
-    return out_i[:found], out_j[:found]

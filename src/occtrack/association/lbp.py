@@ -20,6 +20,11 @@ components of the bipartite graph); the messages of one cluster never reach anot
 cluster is iterated until its own largest change falls below `tol` and then left alone. In a
 crowd most clusters are a person or two and settle in a few iterations, and the cost of an
 iteration follows the pairs still moving, not n m.
+
+The loops are compiled (`_association.pyx` beside this module): `_one_cluster` (fewer pairs
+than `CLUSTER_MIN_PAIRS`: all of them as one cluster, in one call), `_iterate_clusters` (the
+two message equations above, cluster by cluster, each frozen once its largest relative change
+of nu is below `tol`) and `_marginals` (the marginals from the converged messages).
 """
 
 from __future__ import annotations
@@ -28,7 +33,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from occtrack.jit import njit
+from occtrack.association._association import (  # the compiled kernels
+    _iterate_clusters,
+    _marginals,
+    _one_cluster,
+)
 
 
 @dataclass(frozen=True)
@@ -109,9 +118,9 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
     """Loopy BP on the pairs (rows[e], cols[e]) with weights w_hit[e] > 0 (each pair once);
     w_miss (n,) and w_new (m,) as in `lbp_marginals`. Cluster by cluster: a cluster stops when
     its own messages change less than `tol`."""
-    rows = np.asarray(rows, dtype=np.int64)
-    cols = np.asarray(cols, dtype=np.int64)
-    w_hit = np.asarray(w_hit, dtype=float)
+    rows = np.ascontiguousarray(rows, dtype=np.int64)  # the compiled kernels read them in place
+    cols = np.ascontiguousarray(cols, dtype=np.int64)
+    w_hit = np.ascontiguousarray(w_hit, dtype=float)
     w_miss = np.maximum(np.asarray(w_miss, dtype=float), TINY)
     w_new = np.maximum(np.asarray(w_new, dtype=float), TINY)
     n, m, E = len(w_miss), len(w_new), len(rows)
@@ -129,89 +138,3 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
                                             max_iter)
     p_hit, p_miss, p_new = _marginals(rows, cols, ratio, grouped, order, w_new, n)
     return SparseMarginals(p_hit, p_miss, p_new, iterations, count)
-
-
-@njit
-def _one_cluster(rows, cols, w_hit, w_miss, w_new, tol, max_iter):
-    """`lbp_sparse` of pairs taken as one cluster (the pair order is the cluster's):
-    (p_hit, p_miss, p_new, iterations), the same numbers as the clustered path gives."""
-    E = len(rows)
-    ratio, new = np.empty(E), np.empty(E)
-    for e in range(E):
-        ratio[e] = w_hit[e] / w_miss[rows[e]]
-        new[e] = w_new[cols[e]]
-    sizes = np.full(1, E, dtype=np.int64)
-    nu, iterations = _iterate_clusters(rows, cols, ratio, new, sizes, len(w_miss), len(w_new),
-                                       tol, max_iter)
-    p_hit, p_miss, p_new = _marginals(rows, cols, ratio, nu, np.arange(E), w_new, len(w_miss))
-    return p_hit, p_miss, p_new, iterations
-
-
-@njit
-def _marginals(rows, cols, ratio, grouped, order, w_new, n):
-    """p_hit, p_miss and p_new from the converged messages nu (`grouped`, in the order
-    `order` of the edges): with s_e = ratio_e nu_e and S_i the sum of s over row i,
-    p_hit = s / (1 + S_i), p_miss = 1 / (1 + S_i), and p_new_j = w_new_j / (w_new_j + sum of
-    mu_e = ratio_e / (1 + S_i - s_e) over column j)."""
-    E, m = len(rows), len(w_new)
-    s = np.empty(E)
-    for i in range(E):
-        s[order[i]] = ratio[order[i]] * grouped[i]
-    total = np.zeros(n)
-    for e in range(E):
-        total[rows[e]] += s[e]
-    p_hit = np.empty(E)
-    to_new = np.zeros(m)
-    for e in range(E):
-        p_hit[e] = s[e] / (1.0 + total[rows[e]])
-        to_new[cols[e]] += ratio[e] / (1.0 + total[rows[e]] - s[e])
-    p_miss = np.empty(n)
-    for i in range(n):
-        p_miss[i] = 1.0 / (1.0 + total[i])
-    p_new = np.empty(m)
-    for j in range(m):
-        p_new[j] = w_new[j] / (w_new[j] + to_new[j])
-    return p_hit, p_miss, p_new
-
-
-@njit
-def _iterate_clusters(rows, cols, ratio, new, sizes, n, m, tol, max_iter):
-    """The message iteration of `lbp_sparse` on pairs grouped by cluster (`sizes` pairs
-    each, in order): (nu of each pair, iterations). A cluster whose largest relative change
-    of nu falls below `tol` is frozen; the iteration ends when all are, or at `max_iter`."""
-    E, C = len(rows), len(sizes)
-    start = np.zeros(C + 1, dtype=np.int64)
-    for c in range(C):
-        start[c + 1] = start[c] + sizes[c]
-    nu, s, mu = np.ones(E), np.empty(E), np.empty(E)
-    total, into = np.zeros(n), np.zeros(m)
-    live = np.ones(C, dtype=np.bool_)
-    remaining, iterations = C, 0
-    while remaining and iterations < max_iter:
-        iterations += 1
-        for c in range(C):
-            if live[c]:
-                for e in range(start[c], start[c + 1]):
-                    total[rows[e]] = 0.0
-                    into[cols[e]] = 0.0
-        for c in range(C):
-            if live[c]:
-                for e in range(start[c], start[c + 1]):
-                    s[e] = ratio[e] * nu[e]
-                    total[rows[e]] += s[e]
-        for c in range(C):
-            if live[c]:
-                for e in range(start[c], start[c + 1]):
-                    mu[e] = ratio[e] / (1.0 + total[rows[e]] - s[e])
-                    into[cols[e]] += mu[e]
-        for c in range(C):
-            if live[c]:
-                change = 0.0
-                for e in range(start[c], start[c + 1]):
-                    nu_new = 1.0 / (new[e] + into[cols[e]] - mu[e])
-                    change = max(change, abs(nu_new - nu[e]) / nu_new)
-                    nu[e] = nu_new
-                if change < tol:
-                    live[c] = False
-                    remaining -= 1
-    return nu, iterations

@@ -15,16 +15,25 @@ Boxes are edge arrays (..., 2, 2): [axis, low/high], axis 0 horizontal and 1 ver
 Only boxes that overlap can hide one another, so `visible` combines the occluders over the
 overlapping pairs alone (`occtrack.spatial`): the same numbers as the full K x N table, at a
 cost that follows the overlaps rather than K N.
+
+The loops are compiled (`_occlusion.pyx`, its `_box_geometry.pxi`): `_hides` (the formula
+above for one pair), `_table` (every pair), `_visible_dense` (the product over every
+occluder), `_visible_pairs` (over the overlapping pairs only, summed as logarithms) and
+`_hidden_dense` (`hidden_by_seen`'s two tables over every pair).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from occtrack.jit import njit
+from occtrack.occlusion._occlusion import (  # the compiled kernels: _box_geometry.pxi
+    _hidden_dense,
+    _table,
+    _visible_dense,
+    _visible_pairs,
+)
 from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
 
 NO_WEIGHTS = np.zeros(0)
@@ -45,8 +54,9 @@ class BoxOcclusionGeometry:
 
     def __call__(self, hidden: np.ndarray, occluders: np.ndarray) -> np.ndarray:
         """p[k, n]: probability that box `hidden[k]` is hidden by box `occluders[n]`."""
-        return _table(np.asarray(hidden, dtype=float), np.asarray(occluders, dtype=float),
-                      self.gain, self.ramp_zero, self.ramp_one)
+        return _table(np.ascontiguousarray(hidden, dtype=float),
+                      np.ascontiguousarray(occluders, dtype=float), self.gain, self.ramp_zero,
+                      self.ramp_one)
 
     def visible(self, hidden: np.ndarray, occluders: np.ndarray,
                 weights: np.ndarray | None = None, skip: np.ndarray | None = None,
@@ -56,15 +66,17 @@ class BoxOcclusionGeometry:
         skip[k] (-1: none). `sparse` False computes the full table."""
         K, N = len(hidden), len(occluders)
         # (empty weights: all 1; empty skip: none)
-        w = NO_WEIGHTS if weights is None else np.asarray(weights, dtype=float)
-        never = NO_SKIP if skip is None else np.asarray(skip, np.int64)
-        hidden = np.asarray(hidden, dtype=float)
-        occluders = np.asarray(occluders, dtype=float)
+        # (C order throughout: the compiled kernels read the arrays in place)
+        w = NO_WEIGHTS if weights is None else np.ascontiguousarray(weights, dtype=float)
+        never = NO_SKIP if skip is None else np.ascontiguousarray(skip, np.int64)
+        hidden = np.ascontiguousarray(hidden, dtype=float)
+        occluders = np.ascontiguousarray(occluders, dtype=float)
         if not sparse or K * N <= DENSE_PAIRS:
             return _visible_dense(hidden, occluders, w, never, self.gain, self.ramp_zero,
                                   self.ramp_one)
-        k, n = overlapping_pairs(hidden, occluders)
-        return _visible_pairs(hidden, occluders, k, n, w, never, self.gain, self.ramp_zero,
+        k, n = overlapping_pairs(hidden, occluders)  # (np.nonzero's: not in C order)
+        return _visible_pairs(hidden, occluders, np.ascontiguousarray(k),
+                              np.ascontiguousarray(n), w, never, self.gain, self.ramp_zero,
                               self.ramp_one)
 
     def hidden_by_seen(self, boxes: np.ndarray, z: np.ndarray,
@@ -73,71 +85,13 @@ class BoxOcclusionGeometry:
         1 - `visible(z, z)` with no box hiding itself, how surely the others hide each z_j
         (measurement-wise occlusion's two terms); one compiled call where both tables are
         small enough to take every pair."""
-        boxes, z = np.asarray(boxes, dtype=float), np.asarray(z, dtype=float)
+        boxes = np.ascontiguousarray(boxes, dtype=float)
+        z = np.ascontiguousarray(z, dtype=float)
         K, M = len(boxes), len(z)
         if not sparse or (K * M <= DENSE_PAIRS and M * M <= DENSE_PAIRS):
             return _hidden_dense(boxes, z, self.gain, self.ramp_zero, self.ramp_one)
         return (1.0 - self.visible(boxes, z, sparse=sparse),
                 1.0 - self.visible(z, z, skip=np.arange(M), sparse=sparse))
-
-
-@njit
-def _hidden_dense(boxes, z, gain, ramp_zero, ramp_one):
-    """`hidden_by_seen` over every pair: (1 - prod_n (1 - p[k, n]), the same for z_j over the
-    other seen boxes)."""
-    none = np.zeros(0)
-    q = 1.0 - _visible_dense(boxes, z, none, np.zeros(0, dtype=np.int64), gain, ramp_zero,
-                             ramp_one)
-    h = 1.0 - _visible_dense(z, z, none, np.arange(len(z)), gain, ramp_zero, ramp_one)
-    return q, h
-
-
-@njit
-def _hides(a, b, gain, ramp_zero, ramp_one):
-    """p(box a hidden by box b): the formula at the top of this module."""
-    cover = 1.0
-    for axis in range(2):
-        overlap = max(min(a[axis, 1], b[axis, 1]) - max(a[axis, 0], b[axis, 0]), 0.0)
-        cover *= overlap / max(a[axis, 1] - a[axis, 0], 1e-9)
-    gap = (b[1, 1] - a[1, 1]) / max(b[1, 1] - b[1, 0], 1e-9)
-    order = (gap - ramp_zero) / (ramp_one - ramp_zero)
-    return min(max(gain * cover, 0.0), 1.0) * min(max(order, 0.0), 1.0)
-
-
-@njit
-def _table(hidden, occluders, gain, ramp_zero, ramp_one):
-    """p[k, n] for every pair."""
-    out = np.empty((len(hidden), len(occluders)))
-    for k in range(len(hidden)):
-        for n in range(len(occluders)):
-            out[k, n] = _hides(hidden[k], occluders[n], gain, ramp_zero, ramp_one)
-    return out
-
-
-@njit
-def _visible_dense(hidden, occluders, weights, skip, gain, ramp_zero, ramp_one):
-    """prod_n (1 - w_n p[k, n]) over every occluder n but skip[k]."""
-    out = np.ones(len(hidden))
-    for k in range(len(hidden)):
-        for n in range(len(occluders)):
-            if len(skip) == 0 or n != skip[k]:
-                p = _hides(hidden[k], occluders[n], gain, ramp_zero, ramp_one)
-                out[k] *= 1.0 - (weights[n] * p if len(weights) else p)
-    return out
-
-
-@njit
-def _visible_pairs(hidden, occluders, k, n, weights, skip, gain, ramp_zero, ramp_one):
-    """The same product over the listed (k, n) pairs only (the others have p = 0), summed
-    as logarithms."""
-    log_visible = np.zeros(len(hidden))
-    for e in range(len(k)):
-        if len(skip) == 0 or n[e] != skip[k[e]]:
-            p = _hides(hidden[k[e]], occluders[n[e]], gain, ramp_zero, ramp_one)
-            if len(weights):
-                p *= weights[n[e]]
-            log_visible[k[e]] += math.log1p(-min(p, 1.0)) if p < 1.0 else -math.inf
-    return np.exp(log_visible)
 
 
 def combine(p: np.ndarray) -> np.ndarray:

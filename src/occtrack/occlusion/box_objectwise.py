@@ -8,15 +8,23 @@ object i by its mean box, weighted by its existence r_i (only objects with r_i a
     v_k = prod_{i != owner(k)} (1 - r_i p(box_k hidden by mean box_i))
 
 An object never occludes itself; the Poisson part (objects not yet detected) occludes nothing.
+
+The loops are compiled (`_occlusion.pyx`, its `_box_objectwise.pxi`): `_occluder_boxes` (the
+occluders' mean boxes, each the weight-averaged edges of its object's components, and each
+component's place among the occluders, the one it never counts) and `_visible_behind_means`
+(those, then `box_geometry`'s dense product with the existences as weights, in one call).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from occtrack.jit import njit
+from occtrack.occlusion._occlusion import (  # the compiled kernels: _box_objectwise.pxi
+    _occluder_boxes,
+    _visible_behind_means,
+)
 from occtrack.occlusion.base import OcclusionContext, OcclusionTerms
-from occtrack.occlusion.box_geometry import BoxOcclusionGeometry, _visible_dense
+from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.spatial import DENSE_PAIRS
 
 
@@ -30,13 +38,15 @@ class ObjectWiseExpectedValue:
 
     def terms(self, ctx: OcclusionContext) -> OcclusionTerms:
         k = len(ctx.means)
-        r = np.asarray(ctx.existence, dtype=float)
+        # (C order throughout: the compiled kernels read the arrays in place)
+        r = np.ascontiguousarray(ctx.existence, dtype=float)
         occluders = np.flatnonzero(r > self.min_existence)
         if k == 0 or len(occluders) == 0:
             return OcclusionTerms(np.ones(k), np.zeros(k))
-        boxes = ctx.measurement_model.predicted_edges(ctx.means)
-        weights = np.asarray(ctx.weights, dtype=float)
-        owner = np.asarray(ctx.owner, dtype=np.int64)
+        boxes = np.ascontiguousarray(ctx.measurement_model.predicted_edges(ctx.means),
+                                     dtype=float)
+        weights = np.ascontiguousarray(ctx.weights, dtype=float)
+        owner = np.ascontiguousarray(ctx.owner, dtype=np.int64)
         g = self.geometry
         if not ctx.gating or k * len(occluders) <= DENSE_PAIRS:  # one compiled call
             return OcclusionTerms(_visible_behind_means(boxes, weights, owner, occluders, r,
@@ -45,40 +55,3 @@ class ObjectWiseExpectedValue:
         mean_boxes, own = _occluder_boxes(boxes, weights, owner, occluders)
         visible = g.visible(boxes, mean_boxes, weights=r[occluders], skip=own, sparse=True)
         return OcclusionTerms(visible, np.zeros(k))
-
-
-@njit
-def _visible_behind_means(boxes, weights, owner, occluders, existence, gain, ramp_zero,
-                          ramp_one):
-    """v_k over every (component, occluder) pair: `_occluder_boxes`, then the product of
-    `box_geometry`'s dense form with the occluders' existences as weights."""
-    mean_boxes, own = _occluder_boxes(boxes, weights, owner, occluders)
-    return _visible_dense(boxes, mean_boxes, existence[occluders], own, gain, ramp_zero,
-                          ramp_one)
-
-
-@njit
-def _occluder_boxes(boxes, weights, owner, occluders):
-    """The occluders' mean boxes, (n, 2, 2): each the weight-averaged edges of its object's
-    components; and each component's place among the occluders (-1: its object is none, or
-    it is the Poisson part's), the one occluder it never counts."""
-    position = np.full(owner.max() + 1 if len(owner) else 0, -1)
-    for i in range(len(occluders)):
-        if occluders[i] < len(position):
-            position[occluders[i]] = i
-    total = np.zeros(len(occluders))
-    sums = np.zeros((len(occluders), 2, 2))
-    own = np.full(len(owner), -1)
-    for k in range(len(owner)):
-        if owner[k] >= 0 and position[owner[k]] >= 0:
-            i = position[owner[k]]
-            own[k] = i
-            total[i] += weights[k]
-            for axis in range(2):
-                for e in range(2):
-                    sums[i, axis, e] += weights[k] * boxes[k, axis, e]
-    for i in range(len(occluders)):
-        for axis in range(2):
-            for e in range(2):
-                sums[i, axis, e] /= max(total[i], 1e-300)
-    return sums, own

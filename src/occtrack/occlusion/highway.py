@@ -20,7 +20,7 @@ intensity) and lane in a `HighwayContext`.
 
 The undetected intensity (owner -1) is hidden by tracks but hides nothing in the object-wise
 handlers, as in the authors' prototype. The object-wise handlers' loops are compiled
-(`occtrack.occlusion.extent_kernels`, numba), loaded when a handler first runs.
+(`occtrack.occlusion.extent_kernels`, from `_occlusion.pyx`), loaded when a handler first runs.
 """
 
 from __future__ import annotations
