@@ -128,7 +128,8 @@ class BoxMeasurement:
         size; scores are clipped to [score_floor, 1] first."""
         W, H = self.image_size
         # (numpy's power, not libm's: they differ in the last bit)
-        score_term = _clip(scores, self.score_floor, 1.0) ** (-self.clutter_score_power)
+        score_term = _clip(np.ascontiguousarray(scores, dtype=float), self.score_floor,
+                           1.0) ** (-self.clutter_score_power)
         return _box_clutter(z, score_term, self.clutter_rate, W * H)
 
     @staticmethod
