@@ -11,7 +11,8 @@ copy of src/, tests/ and pyproject.toml (so the checkout gets no mutants/ folder
 modules and tests chosen here, by default each module group's own tests.
 
 Compiled loops are not mutated: the kernels are Cython (the _*.pyx beside each package's
-modules), which mutmut does not read, so they get no mutants and count in no score. What notices a fault in them is their comparison with plain numpy:
+modules), which mutmut does not read, so they get no mutants and count in no score. What
+notices a fault in them is their comparison with plain numpy:
 tests/test_kernels.py for the filter's kernels, test_scaling.py for the box model's,
 test_highway_kernels.py for the highway's, and the hand-worked values of
 tests/test_housekeeping.py.
