@@ -7,7 +7,9 @@ measurement (the `dev` extra) and prints, for each method of `GaussianMixturePMB
 capacity, trimming, merging and recycling, its lines and branches run and the branches never
 taken (`line->line`, -N meaning the method returns). Exits 1 unless every one of those branches
 is taken, so a new branch without a test shows. Not CI: coverage's tracing slows the filter
-down; the whole run takes about 10 s. Needs coverage 7.6 or later (per-function JSON).
+down; the whole run takes about 10 s. Needs coverage 7.6 or later (per-function JSON) and
+occtrack installed editable, so that the Python modules run from src/ and the kernels from the
+build (README, "Compiled kernels": `pip install --no-build-isolation -e ".[dev]"`).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ METHODS = ("_reserve", "_reserve_slots", "_select", "_assign_labels", "_merge", 
 def measure(tests: list[str], workdir: Path) -> dict:
     """coverage.py's JSON report of `SOURCE` after running `tests` with branch measurement."""
     data = workdir / ".coverage"
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "COVERAGE_FILE": str(data)}
+    env = {**os.environ, "COVERAGE_FILE": str(data)}  # the editable install: src/ + built kernels
     run = [sys.executable, "-m", "coverage", "run", "--branch", f"--source={ROOT / 'src'}",
            "-m", "pytest", "-q", "-p", "no:randomly", "-p", "no:xdist", "-p",
            "no:cacheprovider", *tests]
