@@ -7,6 +7,7 @@ from libc.math cimport sqrt, exp
 
 from occtrack.models._highway_sensor cimport _both_orders_c  # the sensor's two-ends term
 
+from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (f64, i64, b8, doubles, integers, booleans, dim, new_doubles,
                                zero_doubles, new_integers, zero_integers)
 
@@ -47,14 +48,6 @@ cdef inline f64* _row_doubles(object a, int ndim, str name, Py_ssize_t* stride) 
         raise TypeError(f"{name}: rows that do not overlap, whole float64 apart, are needed")
     stride[0] = row // 8 if cnp.PyArray_DIM(arr, 0) > 1 else item // 8
     return <f64*>cnp.PyArray_DATA(arr)
-
-
-cdef inline double _max(double a, double b) noexcept nogil:
-    return b if b > a else a
-
-
-cdef inline double _min(double a, double b) noexcept nogil:
-    return b if b < a else a
 
 
 # ---- the kernels -------------------------------------------------------------------------------
@@ -167,7 +160,7 @@ cdef inline double _reflect1_c(double v, double lo, double hi) noexcept nogil:
         v = 2 * lo - v
     if v > hi:
         v = 2 * hi - v
-    return _min(_max(v, lo), hi)
+    return py_min(py_max(v, lo), hi)
 
 
 cdef void _liu_west_c(const f64* x, const f64* w, Py_ssize_t n, const i64* idx,
@@ -213,7 +206,7 @@ cdef void _liu_west_c(const f64* x, const f64* w, Py_ssize_t n, const i64* idx,
                 for f in range(e):
                     t -= chol[d * 3 + f] * chol[e * 3 + f]
                 if d == e:
-                    chol[d * 3 + e] = sqrt(_max(t, 0.0))
+                    chol[d * 3 + e] = sqrt(py_max(t, 0.0))
                 else:
                     chol[d * 3 + e] = t / chol[e * 3 + e] if chol[e * 3 + e] > 0 else 0.0
         sign = direction[r]
@@ -404,7 +397,7 @@ def _associate(object x, object w, object r, object lane, object ux, object uw,
         for k in range(per_lane):
             key[k] = uxp[(lj * per_lane + k) * 3] + off
         lo = zleft[j * 2] - reach
-        hi = _max(zleft[j * 2 + 1], zright[j * 2 + 1]) + reach
+        hi = py_max(zleft[j * 2 + 1], zright[j * 2 + 1]) + reach
         _window_c(key, per_lane, lo + off, hi + off, &a, &b)
         first[j] = a
         count[j] = b - a
@@ -438,7 +431,7 @@ def _associate(object x, object w, object r, object lane, object ux, object uw,
         e[j] = pd * _row_sum_c(hj, width)
         # A floor far below any real weight: outside the clutter's support (e.g. a car
         # entering) w_new may be 0, which loopy belief propagation cannot divide by.
-        w_new[j] = _max(clut[j] + e[j], 1e-12)
+        w_new[j] = py_max(clut[j] + e[j], 1e-12)
 
     # the tracks: gate, then score the pairs
     gate_ = new_integers(1, 2 * n * m)
@@ -450,10 +443,10 @@ def _associate(object x, object w, object r, object lane, object ux, object uw,
         for k in range(1, N):
             left = xp[(i * N + k) * 3]
             right = left + xp[(i * N + k) * 3 + 1]
-            l_min = _min(l_min, left)
-            l_max = _max(l_max, left)
-            r_min = _min(r_min, right)
-            r_max = _max(r_max, right)
+            l_min = py_min(l_min, left)
+            l_max = py_max(l_max, left)
+            r_min = py_min(r_min, right)
+            r_max = py_max(r_max, right)
         for j in range(m):
             if (lp[i] == zl[j] and l_min - reach <= zleft[j * 2 + 1]
                     and l_max + reach >= zleft[j * 2] and r_min - reach <= zright[j * 2 + 1]
@@ -517,7 +510,7 @@ def _update(object x, object w, object r, object uw, object miss, object w_miss,
     cdef f64* head = <f64*>cnp.PyArray_DATA(head_)
     cdef f64* rest = <f64*>cnp.PyArray_DATA(rest_)
     for i in range(n):
-        coef = pm[i] * rp[i] / _max(wm[i], 1e-300)
+        coef = pm[i] * rp[i] / py_max(wm[i], 1e-300)
         for k in range(N):
             post[i * N + k] = coef * wp[i * N + k] * missp[base + i * N + k]
     # A track's pairs are summed as np.add.reduceat summed them: the first pair's term plus
@@ -528,7 +521,7 @@ def _update(object x, object w, object r, object uw, object miss, object w_miss,
         q = p
         while q < pairs and tip[q] == i:
             j = mjp[q]
-            scale = ph[i * mh + j] / _max(wh[i * mw + j], 1e-300) * rp[i] * pd
+            scale = ph[i * mh + j] / py_max(wh[i * mw + j], 1e-300) * rp[i] * pd
             if q == p:
                 for k in range(N):
                     head[k] = scale * hpp[q * N + k]
@@ -548,7 +541,7 @@ def _update(object x, object w, object r, object uw, object miss, object w_miss,
         p = q
     for i in range(n):
         r_post = _row_sum_c(post + i * N, N)
-        rp[i] = _min(_max(r_post, 0.0), 1.0)
+        rp[i] = py_min(py_max(r_post, 0.0), 1.0)
         scale = r_post if r_post > 0 else 1.0
         for k in range(N):
             wp[i * N + k] = post[i * N + k] / scale
@@ -558,7 +551,7 @@ def _update(object x, object w, object r, object uw, object miss, object w_miss,
     r_born_ = new_doubles(1, m)
     cdef f64* r_born = <f64*>cnp.PyArray_DATA(r_born_)
     for j in range(m):
-        r_born[j] = pn[j] * ep[j] / _max(wn[j], 1e-300)
+        r_born[j] = pn[j] * ep[j] / py_max(wn[j], 1e-300)
     return r_born_
 
 
@@ -574,7 +567,7 @@ def _degenerate(object w, object r, double threshold):
     for i in range(n):
         for k in range(N):
             sq[k] = wp[i * N + k] * wp[i * N + k]
-        if 1.0 / _max(_row_sum_c(sq, N), 1e-300) < threshold and rp[i] > 0:
+        if 1.0 / py_max(_row_sum_c(sq, N), 1e-300) < threshold and rp[i] > 0:
             rows[count] = i
             count += 1
     out = new_integers(1, count)

@@ -7,12 +7,12 @@ cdef inline double _hides_c(const f64* a, const f64* b, double gain, double ramp
     cdef double cover = 1.0, overlap, gap, order
     cdef int axis
     for axis in range(2):  # (ZERO, ONE: 0.0 and 1.0, see _occlusion.pyx)
-        overlap = _max(_min(a[axis * 2 + 1], b[axis * 2 + 1])
-                       - _max(a[axis * 2], b[axis * 2]), ZERO)
-        cover *= overlap / _max(a[axis * 2 + 1] - a[axis * 2], 1e-9)
-    gap = (b[3] - a[3]) / _max(b[3] - b[2], 1e-9)
+        overlap = py_max(py_min(a[axis * 2 + 1], b[axis * 2 + 1])
+                       - py_max(a[axis * 2], b[axis * 2]), ZERO)
+        cover *= overlap / py_max(a[axis * 2 + 1] - a[axis * 2], 1e-9)
+    gap = (b[3] - a[3]) / py_max(b[3] - b[2], 1e-9)
     order = (gap - ramp_zero) / (ramp_one - ramp_zero)
-    return _min(_max(gain * cover, ZERO), ONE) * _min(_max(order, ZERO), ONE)
+    return py_min(py_max(gain * cover, ZERO), ONE) * py_min(py_max(order, ZERO), ONE)
 
 
 cdef void _visible_dense_c(const f64* hidden, Py_ssize_t K, const f64* occluders,
@@ -101,7 +101,7 @@ def _visible_pairs(hidden, occluders, k, n, weights, skip, double gain, double r
             p = _hides_c(h + pk[e] * 4, o + pn[e] * 4, gain, ramp_zero, ramp_one)
             if n_weights:
                 p *= w[pn[e]]
-            log_visible[pk[e]] += log1p(-_min(p, 1.0)) if p < 1.0 else -INFINITY
+            log_visible[pk[e]] += log1p(-py_min(p, 1.0)) if p < 1.0 else -INFINITY
     for e in range(K):
         log_visible[e] = exp(log_visible[e])
     return log_visible_

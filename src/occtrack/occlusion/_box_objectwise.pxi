@@ -34,7 +34,7 @@ cdef int _occluder_boxes_c(const f64* boxes, const f64* weights, const i64* owne
                 sums[i * 4 + j] += weights[k] * boxes[k * 4 + j]
     for i in range(n_occ):
         for j in range(4):
-            sums[i * 4 + j] /= _max(total[i], 1e-300)
+            sums[i * 4 + j] /= py_max(total[i], 1e-300)
     return 0
 
 

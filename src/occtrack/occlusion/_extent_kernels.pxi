@@ -33,7 +33,7 @@ def track_extents(owner, lane, weights, a_left, a_right, Py_ssize_t n):
         sum_r[i] += wp * ar[p]
         track_lane[i] = ln[p]
     for i in range(n):
-        t = _max(total[i], DBL_MIN)
+        t = py_max(total[i], DBL_MIN)
         sum_l[i] /= t
         sum_r[i] /= t
     return track_lane_, sum_l_, sum_r_
@@ -73,8 +73,8 @@ def expval_visibility(owner, lane, a_left, a_right, existence, occ_lane, occ_l, 
         max_l = -INFINITY
         min_r = INFINITY
         for p in range(start, end):
-            max_l = _max(max_l, al[p])
-            min_r = _min(min_r, ar[p])
+            max_l = py_max(max_l, al[p])
+            min_r = py_min(min_r, ar[p])
         for i in range(n_occ):
             if o_lane[i] >= run_lane or o_l[i] >= max_l or o_r[i] <= min_r:
                 continue
@@ -83,12 +83,12 @@ def expval_visibility(owner, lane, a_left, a_right, existence, occ_lane, occ_l, 
                 cover_r = o_r[i] - ar[p]
                 if cover_l > 0 and cover_r > 0:
                     hidden = r[i] * -expm1(-beta * cover_l) * -expm1(-beta * cover_r)
-                    log_open[p] += log1p(-_min(hidden, 1.0 - 1e-12))
+                    log_open[p] += log1p(-py_min(hidden, 1.0 - 1e-12))
         start = end
     visible_ = new_doubles(1, k)
     cdef f64* visible = <f64*>cnp.PyArray_DATA(visible_)
     for p in range(k):
-        visible[p] = _max(exp(log_open[p]), min_visible)
+        visible[p] = py_max(exp(log_open[p]), min_visible)
     return visible_
 
 
@@ -126,8 +126,8 @@ def grid_visibility(owner, lane, weights, a_left, a_right, existence, Py_ssize_t
     cdef double t, covered, p_cover, behind, best
     cdef i64 f, g, row
     for p in range(k):
-        first[p] = _imax(<i64>ceil((al[p] - c0) / step), 0)
-        last[p] = _imin(<i64>floor((ar[p] - c0) / step), cells - 1)
+        first[p] = py_imax(<i64>ceil((al[p] - c0) / step), 0)
+        last[p] = py_imin(<i64>floor((ar[p] - c0) / step), cells - 1)
     for p in range(k):
         i = own[p]
         if i < 0:
@@ -142,12 +142,12 @@ def grid_visibility(owner, lane, weights, a_left, a_right, existence, Py_ssize_t
     for i in range(n):
         if track_lane[i] < 0 or track_lane[i] >= n_lanes:
             raise IndexError(f"lane: {track_lane[i]} of {n_lanes}")
-        t = _max(total[i], DBL_MIN)
+        t = py_max(total[i], DBL_MIN)
         covered = 0.0
         for c in range(cells):
             covered += diff[i * (cells + 1) + c]
-            p_cover = _min(_max(covered / t, 0.0), 1.0)
-            log_open[track_lane[i] * cells + c] += log1p(-_min(r[i] * p_cover, 1.0 - 1e-12))
+            p_cover = py_min(py_max(covered / t, 0.0), 1.0)
+            log_open[track_lane[i] * cells + c] += log1p(-py_min(r[i] * p_cover, 1.0 - 1e-12))
     # open probability seen from lane k: occluders in lanes 0 .. k-1 only
     for c in range(cells):
         behind = 0.0
@@ -160,7 +160,7 @@ def grid_visibility(owner, lane, weights, a_left, a_right, existence, Py_ssize_t
             continue
         f, g = first[p], last[p]
         if f > g:
-            f = _imin(_imax(<i64>floor((0.5 * (al[p] + ar[p]) - c0) / step + 0.5), 0),
+            f = py_imin(py_imax(<i64>floor((0.5 * (al[p] + ar[p]) - c0) / step + 0.5), 0),
                       cells - 1)
             g = f
         best = 0.0
@@ -168,6 +168,6 @@ def grid_visibility(owner, lane, weights, a_left, a_right, existence, Py_ssize_t
         if row < 0 or row >= n_lanes:
             raise IndexError(f"lane: {row} of {n_lanes}")
         for c in range(f, g + 1):
-            best = _max(best, opened[row * cells + c])
+            best = py_max(best, opened[row * cells + c])
         visible[p] = best
     return visible_

@@ -26,6 +26,7 @@ from libc.float cimport DBL_MIN
 from libc.math cimport (INFINITY, asin, atan2, ceil, erfc, exp, expm1, floor, hypot, log,
                         log1p, sqrt)
 
+from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (b8, dim, doubles, f64, i64, integers, new_doubles,
                                new_integers, zero_booleans, zero_doubles, zero_integers)
 from occtrack.models._scan_geometry cimport Window, beam_direction, beam_window_c, near_range_uv
@@ -34,16 +35,6 @@ cnp.import_array()
 
 
 # ---- shared by the kernels ----------------------------------------------------------------
-
-cdef inline double _max(double a, double b) noexcept nogil:
-    """Python's and numba's max(a, b): b only when b > a (so a NaN b gives a)."""
-    return b if b > a else a
-
-
-cdef inline double _min(double a, double b) noexcept nogil:
-    """Python's and numba's min(a, b): b only when b < a."""
-    return b if b < a else a
-
 
 cdef extern from *:
     """
@@ -55,14 +46,6 @@ cdef extern from *:
     """
     double ZERO "occtrack_zero"
     double ONE "occtrack_one"
-
-
-cdef inline i64 _imax(i64 a, i64 b) noexcept nogil:
-    return b if b > a else a
-
-
-cdef inline i64 _imin(i64 a, i64 b) noexcept nogil:
-    return b if b < a else a
 
 
 cdef inline Py_ssize_t _length(object a, Py_ssize_t n, str name) except -1:

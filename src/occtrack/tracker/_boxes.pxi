@@ -19,5 +19,5 @@ def _checked_ltwh(object boxes, object scores):
         if b[j * 4 + 2] < 0.0 or b[j * 4 + 3] < 0.0:
             return False, out
         o[j * 4 + 0], o[j * 4 + 1] = b[j * 4 + 0], b[j * 4 + 1]
-        o[j * 4 + 2], o[j * 4 + 3] = dmax(b[j * 4 + 2], 1.0), dmax(b[j * 4 + 3], 1.0)
+        o[j * 4 + 2], o[j * 4 + 3] = py_max(b[j * 4 + 2], 1.0), py_max(b[j * 4 + 3], 1.0)
     return True, out

@@ -232,7 +232,7 @@ cdef bint _expansion_fit_c(const f64* pairs, const i64* which, Py_ssize_t P,
             e = pairs[p * 2 + a] - mean_d[a] - k * lever[p * 2 + a]
             rss += e * e
     k_out[0] = k
-    variance[0] = rss / imax(2 * P - 3, 1) / norm
+    variance[0] = rss / py_imax(2 * P - 3, 1) / norm
     return True
 
 
@@ -258,10 +258,10 @@ cdef inline bint _qualifies_c(double hp, double hc, double dx, double dy, double
                               double inverse_ratio, double* unit) noexcept nogil:
     """`_qualifies` given 1.0 / height_ratio (the same number, once a loop); sqrt(hp hc) in
     `unit`. (numba's `and` of the three tests, each evaluated: no side effect, no branch.)"""
-    cdef double ratio = hc / dmax(hp, 1e-9)
+    cdef double ratio = hc / py_max(hp, 1e-9)
     unit[0] = sqrt(hp * hc)
     return ((ratio < height_ratio) & (ratio > inverse_ratio)
-            & (dmax(fabs(dx), fabs(dy)) < unit[0]))
+            & (py_max(fabs(dx), fabs(dy)) < unit[0]))
 
 
 def _qualifies(double hp, double hc, double dx, double dy, double height_ratio):
@@ -273,10 +273,10 @@ def _qualifies(double hp, double hc, double dx, double dy, double height_ratio):
 
 cdef inline double _iou_c(const f64* a, Py_ssize_t i, const f64* b,
                           Py_ssize_t j) noexcept nogil:
-    cdef double iw = dmax(dmin(a[i * 4 + 0] + a[i * 4 + 2], b[j * 4 + 0] + b[j * 4 + 2])
-                          - dmax(a[i * 4 + 0], b[j * 4 + 0]), 0.0)
-    cdef double ih = dmax(dmin(a[i * 4 + 1] + a[i * 4 + 3], b[j * 4 + 1] + b[j * 4 + 3])
-                          - dmax(a[i * 4 + 1], b[j * 4 + 1]), 0.0)
+    cdef double iw = py_max(py_min(a[i * 4 + 0] + a[i * 4 + 2], b[j * 4 + 0] + b[j * 4 + 2])
+                          - py_max(a[i * 4 + 0], b[j * 4 + 0]), 0.0)
+    cdef double ih = py_max(py_min(a[i * 4 + 1] + a[i * 4 + 3], b[j * 4 + 1] + b[j * 4 + 3])
+                          - py_max(a[i * 4 + 1], b[j * 4 + 1]), 0.0)
     cdef double inter = iw * ih
     cdef double union = a[i * 4 + 2] * a[i * 4 + 3] + b[j * 4 + 2] * b[j * 4 + 3] - inter
     return inter / union if union > 0 else 0.0
@@ -544,7 +544,7 @@ cdef int _votes_c(const f64* x, const f64* y, const f64* radius, Py_ssize_t C,
     if C == 0 or not nan_max(radius, C) > 0:
         return 0
     low = nan_min(y, C)
-    tall = dmax(nan_max(radius, C), (nan_max(y, C) - low) / C)  # any height is exact
+    tall = py_max(nan_max(radius, C), (nan_max(y, C) - low) / C)  # any height is exact
     strip_, first_, order_, work_ = (new_integers(1, C), new_integers(1, C),
                                      new_integers(1, C), new_integers(1, C))
     cdef i64* strip = idata(strip_)
@@ -583,7 +583,7 @@ cdef int _votes_c(const f64* x, const f64* y, const f64* radius, Py_ssize_t C,
             xa, ya, ra = xs[a], ys[a], rs[a]
             # a margin far above rounding, so that no pair within reach is left out
             mx, my = 1e-9 * (fabs(xa) + ra), 1e-9 * (fabs(ya) + fabs(low) + ra)
-            last = imin(<i64>floor((ya + ra + my - low) / tall), strips - 1)
+            last = py_imin(<i64>floor((ya + ra + my - low) / tall), strips - 1)
             own = 0
             for t in range(s, last + 1):
                 if t == s:
@@ -592,8 +592,8 @@ cdef int _votes_c(const f64* x, const f64* y, const f64* radius, Py_ssize_t C,
                     b = start[t] + search_left(xs + start[t], start[t + 1] - start[t],
                                                xa - ra - mx)
                 while b < start[t + 1] and xs[b] < xa + ra + mx:
-                    limit = dmin(ra, rs[b])
-                    near = dmax(fabs(xs[b] - xa), fabs(ys[b] - ya)) < limit
+                    limit = py_min(ra, rs[b])
+                    near = py_max(fabs(xs[b] - xa), fabs(ys[b] - ya)) < limit
                     own += near
                     counted[b] += near
                     b += 1

@@ -23,7 +23,7 @@ cdef void box_covariances_c(const i64* label, const f64* mass, const f64* mean,
         i = label[k]
         if i < 0:
             continue
-        share = mass[k] / dmax(r[i], 1e-300)
+        share = mass[k] / py_max(r[i], 1e-300)
         for a in range(2):
             d0 = mean[(k * 2 + a) * 3 + 0] - means[(i * 2 + a) * 3 + 0]
             d2 = mean[(k * 2 + a) * 3 + 2] - means[(i * 2 + a) * 3 + 2]
@@ -147,7 +147,7 @@ def _report_confidence(object label, object mass, object mean, object cov, objec
     cdef f64* need = fdata(need_)
     if floor_value > 0.0:
         for a in range(K):
-            need[a] = floor_value / dmax(existence[a], 1e-300)
+            need[a] = floor_value / py_max(existence[a], 1e-300)
     out_ = _overlap_probability(centre_, half_, spread_, boxes, threshold, z, reach, need_)
     cdef f64* out = fdata(out_)
     for a in range(K):
@@ -157,7 +157,7 @@ def _report_confidence(object label, object mass, object mean, object cov, objec
 
 cdef inline double _overlap_c(double c, double s, double lo, double hi) noexcept nogil:
     """Length of [c - s, c + s] within [lo, hi]."""
-    return dmax(dmin(c + s, hi) - dmax(c - s, lo), 0.0)
+    return py_max(py_min(c + s, hi) - py_max(c - s, lo), 0.0)
 
 
 def _overlap(double c, double s, double lo, double hi):
@@ -282,10 +282,10 @@ cdef void _overlap_probability_c(const f64* centre, const f64* half, const f64* 
         root[a] = 0.0
     for i in range(n):
         for a in range(2):  # a lower-triangular square root of the axis' 2 x 2 covariance
-            l00 = sqrt(dmax(covariance[((i * 2 + a) * 2 + 0) * 2 + 0], 0.0))
+            l00 = sqrt(py_max(covariance[((i * 2 + a) * 2 + 0) * 2 + 0], 0.0))
             l10 = covariance[((i * 2 + a) * 2 + 0) * 2 + 1] / l00 if l00 > 0 else 0.0
             root[a * 3 + 0], root[a * 3 + 1] = l00, l10
-            root[a * 3 + 2] = sqrt(dmax(covariance[((i * 2 + a) * 2 + 1) * 2 + 1] - l10 * l10,
+            root[a * 3 + 2] = sqrt(py_max(covariance[((i * 2 + a) * 2 + 1) * 2 + 1] - l10 * l10,
                                         0.0))
         area = reported[i * 4 + 2] * reported[i * 4 + 3]
         hits = 0
@@ -313,13 +313,13 @@ cdef int _decided_c(const f64* centre, const f64* half, const f64* root, const f
         dc = root[a * 3 + 0] * reach[a * 2 + 0]
         ds = fabs(root[a * 3 + 1]) * reach[a * 2 + 0] + root[a * 3 + 2] * reach[a * 2 + 1]
         c_lo, c_hi = centre[a] - dc, centre[a] + dc
-        s_lo, s_hi = dmax(half[a] - ds, 0.0), dmax(half[a] + ds, 0.0)
+        s_lo, s_hi = py_max(half[a] - ds, 0.0), py_max(half[a] + ds, 0.0)
         lo, hi = reported[a], reported[a] + reported[2 + a]
-        least *= dmin(_overlap_c(c_lo, s_lo, lo, hi), _overlap_c(c_hi, s_lo, lo, hi))
-        most *= _overlap_c(dmin(dmax((lo + hi) / 2.0, c_lo), c_hi), s_hi, lo, hi)
+        least *= py_min(_overlap_c(c_lo, s_lo, lo, hi), _overlap_c(c_hi, s_lo, lo, hi))
+        most *= _overlap_c(py_min(py_max((lo + hi) / 2.0, c_lo), c_hi), s_hi, lo, hi)
         smallest *= 2.0 * s_lo
         largest *= 2.0 * s_hi
-    margin = 1e-9 * dmax(area, 1.0)  # (rounding: no draw may straddle the bound)
+    margin = 1e-9 * py_max(area, 1.0)  # (rounding: no draw may straddle the bound)
     if largest + area - least > 0 and least - margin >= threshold * (largest + area - least):
         return 1
     if most + margin < threshold * (smallest + area - most):

@@ -25,6 +25,7 @@ both give numba's numbers to the bit.
 cimport numpy as cnp
 from libc.math cimport fabs, floor, isfinite, sqrt
 
+from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (
     argsort_stable,
     argsort_stable_i64,
@@ -46,39 +47,6 @@ from occtrack._arrays cimport (
 import numpy as np
 
 cnp.import_array()
-
-
-# ---- Python's max and min of two numbers, as numba's builtins (the first unless the second
-# is strictly larger / smaller: NaN handling as there). On x86-64 SSE2's maxsd / minsd, which
-# are exactly that (gcc otherwise branches on max(x, 0.0), and the branch is a coin toss in
-# the overlap loops) -----------------------------------------------------------------------
-
-cdef extern from *:
-    """
-    #if defined(__SSE2__)
-    #include <emmintrin.h>
-    /* maxsd(x, y) = x > y ? x : y and minsd(x, y) = x < y ? x : y, to the bit */
-    static inline double occtrack_dmax(double a, double b) {
-        return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(b), _mm_set_sd(a)));
-    }
-    static inline double occtrack_dmin(double a, double b) {
-        return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(b), _mm_set_sd(a)));
-    }
-    #else
-    static inline double occtrack_dmax(double a, double b) { return b > a ? b : a; }
-    static inline double occtrack_dmin(double a, double b) { return b < a ? b : a; }
-    #endif
-    """
-    double dmax "occtrack_dmax"(double a, double b) noexcept nogil
-    double dmin "occtrack_dmin"(double a, double b) noexcept nogil
-
-
-cdef inline i64 imax(i64 a, i64 b) noexcept nogil:
-    return b if b > a else a
-
-
-cdef inline i64 imin(i64 a, i64 b) noexcept nogil:
-    return b if b < a else a
 
 
 # ---- the data of checked arrays, and a check of lengths -----------------------------------

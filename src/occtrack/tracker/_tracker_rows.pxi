@@ -90,7 +90,7 @@ def _reported(object r, object means, object centre_std, object used, object too
         if not us[k] or not rr[k] > min_existence:
             continue
         if tk[k] < 0:
-            height = dmax(2.0 * mm[(k * 2 + 1) * 3 + 2], 1.0)
+            height = py_max(2.0 * mm[(k * 2 + 1) * 3 + 2], 1.0)
             if not (co[k] <= coast_time + 1e-9 and cs[k * 2 + 0] < max_centre_std * height
                     and cs[k * 2 + 1] < max_centre_std * height):
                 continue

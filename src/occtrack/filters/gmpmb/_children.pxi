@@ -90,7 +90,7 @@ cdef cnp.ndarray _trim_c(f64* mass, const i64* label, const i64* measurement, Py
     for c in range(n):
         key[c] = label[c] if label[c] >= 0 else (L + measurement[c] if measurement[c] >= 0
                                                  else -1)
-        top = imax(top, key[c])
+        top = py_imax(top, key[c])
     cdef cnp.ndarray keep_ = new_booleans(1, n)
     cdef b8* keep = bp(keep_)
     for c in range(n):
@@ -134,7 +134,7 @@ cdef cnp.ndarray _trim_c(f64* mass, const i64* label, const i64* measurement, Py
                     kept_total += mass[ranked[rank]]
                 else:
                     keep[ranked[rank]] = False
-            scale = total / pmax(kept_total, 1e-300)
+            scale = total / py_max(kept_total, 1e-300)
             for i in range(size):
                 mass[members[i]] *= scale
         first = last
@@ -275,12 +275,12 @@ def _child_features(parent, j, det, occ, occ_all, established, v, q, miss, seen_
     cdef double d, o, vv, mm, hidden_if_occludable, escaped, seen_o, missed_o
     for c in range(C):
         k = pa[c]
-        d, o, vv, mm = de[k], oc[k], v_[k], pmax(mi[k], 1e-300)
+        d, o, vv, mm = de[k], oc[k], v_[k], py_max(mi[k], 1e-300)
         hidden_if_occludable = 1.0 - vv + vv * q_[k]
         if jj[c] >= 0:
             new_det[c] = 1.0
             escaped = vv * (1.0 - sh[jj[c]])
-            seen_o = o * escaped / pmax(1.0 - o + o * escaped, 1e-300)
+            seen_o = o * escaped / py_max(1.0 - o + o * escaped, 1e-300)
             new_occ[c] = seen_o if es[k] else oa[k]
             new_coast[c] = 0.0
         else:

@@ -19,6 +19,7 @@ from libc.math cimport exp, exp2, floor, log2, rint, sqrt
 from libc.stdint cimport uint64_t
 from libc.string cimport memcpy
 
+from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (
     argsort_stable,
     argsort_stable_i64,
@@ -47,24 +48,6 @@ cdef double MIN_HEIGHT = _MIN_HEIGHT  # px: the scale of a degenerate box (model
 
 
 # ---- shared: Python's max and min, numpy's maximum, the data of a new array, rows --------
-
-cdef inline double pmax(double a, double b) noexcept nogil:
-    """Python's max(a, b) (numba's): b if b > a, else a (a NaN first argument stays)."""
-    return b if b > a else a
-
-
-cdef inline double pmin(double a, double b) noexcept nogil:
-    """Python's min(a, b): b if b < a, else a."""
-    return b if b < a else a
-
-
-cdef inline i64 imax(i64 a, i64 b) noexcept nogil:
-    return b if b > a else a
-
-
-cdef inline i64 imin(i64 a, i64 b) noexcept nogil:
-    return b if b < a else a
-
 
 cdef inline double npmaximum(double a, double b) noexcept nogil:
     """np.maximum(a, b) (numba's): a NaN of either wins, the first if both."""

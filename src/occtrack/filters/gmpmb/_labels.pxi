@@ -248,7 +248,7 @@ def _confirm_in_place(used, age, hits, label, i64 window, i64 needed):
     cdef b8* doomed = bp(doomed_)
     cdef bint any_doomed = False
     for i in range(L):
-        if u[i] and hi[i] + imax(window - ag[i], 0) < needed:
+        if u[i] and hi[i] + py_imax(window - ag[i], 0) < needed:
             doomed[i] = True
             u[i] = False
             any_doomed = True
@@ -275,7 +275,7 @@ def _cap_in_place(mass, label, Py_ssize_t L):
     for k in range(n):
         i = lab[k]
         if i >= 0 and r[i] > 1.0:
-            m[k] *= 1.0 / pmax(r[i], 1e-300)
+            m[k] *= 1.0 / py_max(r[i], 1e-300)
 
 
 def _object_moments(label, mass, mean, cov, Py_ssize_t L):
@@ -296,14 +296,14 @@ def _object_moments(label, mass, mean, cov, Py_ssize_t L):
     for k in range(n):
         i = lab[k]
         if i >= 0:
-            share = m[k] / pmax(r[i], 1e-300)
+            share = m[k] / py_max(r[i], 1e-300)
             for b in range(B):
                 for c in range(d):
                     means[(i * B + b) * d + c] += share * mu[(k * B + b) * d + c]
     for k in range(n):
         i = lab[k]
         if i >= 0:
-            share = m[k] / pmax(r[i], 1e-300)
+            share = m[k] / py_max(r[i], 1e-300)
             for a in range(2):
                 dev = mu[(k * B + a) * d] - means[(i * B + a) * d]
                 var[i * 2 + a] += share * (P[((k * B + a) * d) * d] + dev * dev)

@@ -91,7 +91,7 @@ cdef cnp.ndarray _cell_keys_c(const f64* mean, const i64* label, const f64* cell
     cdef Py_ssize_t k, axis, r
     cdef double octave, scale
     for k in range(n):
-        octave = rint(log2(pmax(2.0 * mean[(k * B + 1) * d + 2], MIN_HEIGHT)))
+        octave = rint(log2(py_max(2.0 * mean[(k * B + 1) * d + 2], MIN_HEIGHT)))
         scale = exp2(octave)
         key[k * 8], key[k * 8 + 1] = label[k], <i64>octave
         for axis in range(2):
@@ -124,8 +124,8 @@ cdef tuple _packed_order_c(const i64* key, Py_ssize_t n, Py_ssize_t width):
         high[c] = key[c]
     for k in range(n):
         for c in range(width):
-            low[c] = imin(low[c], key[k * width + c])
-            high[c] = imax(high[c], key[k * width + c])
+            low[c] = py_imin(low[c], key[k * width + c])
+            high[c] = py_imax(high[c], key[k * width + c])
     cdef double bits = 0.0
     for c in range(width):
         # (numba's int64 arithmetic wraps: so does this one)

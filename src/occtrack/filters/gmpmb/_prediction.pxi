@@ -17,7 +17,7 @@ cdef void _predict_c(f64* mean, f64* cov, Py_ssize_t n, Py_ssize_t B, Py_ssize_t
             A, Qk = F_coast, Q_coast
         else:
             A, Qk = F, Q
-        unit2 = pmax(2.0 * mean[(k * B + 1) * d + 2], MIN_HEIGHT)
+        unit2 = py_max(2.0 * mean[(k * B + 1) * d + 2], MIN_HEIGHT)
         unit2 = unit2 * unit2
         for b in range(B):
             for r in range(d):

@@ -34,7 +34,7 @@ def _occludable(label, mass, occ_all, used, hits, i64 confirm_hits, double stati
             if established[k]:
                 occ[k] = oa[k]
                 o_seen[k] = oa[k]
-            within[k] = m[k] / pmax(r[i], 1e-300)
+            within[k] = m[k] / py_max(r[i], 1e-300)
         else:
             within[k] = m[k]
     return established_, occ_, o_seen_, r_, within_
@@ -55,8 +55,8 @@ def _miss_terms(det, occ, visible, hidden):
     cdef f64* pd = fp(pd_)
     cdef f64* miss = fp(miss_)
     for k in range(n):
-        v[k] = pmin(pmax(vis[k], 0.0), 1.0)
-        q[k] = pmin(pmax(hid[k], 0.0), 1.0)
+        v[k] = py_min(py_max(vis[k], 0.0), 1.0)
+        q[k] = py_min(py_max(hid[k], 0.0), 1.0)
         pd[k] = de[k] * (1.0 - oc[k] + oc[k] * v[k])
         miss[k] = 1.0 - pd[k] + de[k] * oc[k] * v[k] * q[k]
     return v_, q_, pd_, miss_
@@ -69,7 +69,7 @@ def _clipped(x, double low, double high):
     cdef cnp.ndarray out_ = new_doubles(1, n)
     cdef f64* out = fp(out_)
     for i in range(n):
-        out[i] = pmin(pmax(xx[i], low), high)
+        out[i] = py_min(py_max(xx[i], low), high)
     return out_
 
 
@@ -163,7 +163,7 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, i64 A, P
             weight = m[k] * de[k] * (1.0 - o + o * vv[k] * (1.0 - sh[j]))
         else:
             weight = m[k] * p_d[k]
-        value = exp(lh[e]) * pmax(weight, 1e-300)
+        value = exp(lh[e]) * py_max(weight, 1e-300)
         if value > HIT_FLOOR and (one_class or lab[k] < 0 or sc[lab[k]] == cl[j]):
             keep[e] = True
             hit[e] = value
@@ -230,8 +230,8 @@ cdef cnp.ndarray _object_misses_c(const i64* rows, Py_ssize_t n, Py_ssize_t A, c
     cdef cnp.ndarray miss_obj_ = new_doubles(1, A)
     cdef f64* miss_obj = fp(miss_obj_)
     for a in range(A):
-        slot_hidden[slots[a]] = hidden_mass[a] / pmax(miss_mass[a], 1e-300)
-        miss_obj[a] = pmax(1.0 - r[a] + miss_mass[a], 1e-300)
+        slot_hidden[slots[a]] = hidden_mass[a] / py_max(miss_mass[a], 1e-300)
+        miss_obj[a] = py_max(1.0 - r[a] + miss_mass[a], 1e-300)
     return miss_obj_
 
 
