@@ -7,6 +7,10 @@ linked between extensions.
     from occtrack._arrays cimport f64, i64, b8, doubles, integers, booleans, dim
     cdef f64* x = doubles(a, 2, "a")      # a: C-contiguous float64, 2-d; x[i * dim(a, 1) + j]
     out = new_doubles(1, n)               # numpy.empty(n)
+
+Also Python's max and min of two numbers as numba compiled them (`py_max`, `py_min`,
+`py_imax`, `py_imin`) and numpy's stable argsort (`argsort_stable`, `argsort_stable_i64`),
+which every extension shares.
 """
 
 cimport numpy as cnp
