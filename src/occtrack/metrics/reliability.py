@@ -27,9 +27,11 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from occtrack.metrics.protocols import ScoredFrames
+from occtrack.tracker.confidence import RIGHT_IOU  # the event the tracker's confidence is of
 
-RIGHT_IOU = 0.5
-"""A reported box is right when it is matched to a true object at IoU >= this."""
+__all__ = ["BINS", "RIGHT_IOU", "Reliability", "pooled", "reliability", "reliability_table",
+           "right_boxes"]
+
 BINS = 10
 
 

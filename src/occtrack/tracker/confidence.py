@@ -45,6 +45,8 @@ from occtrack.tracker._tracker import (  # noqa: F401 (kernels kept under their 
 )
 
 RIGHT_IOU = 0.5
+"""A reported box is right when it is matched to a true object at IoU >= this: the event
+`confidence` is the probability of, and what `occtrack.metrics.reliability` scores."""
 DRAWS = 1024
 _Z = np.random.default_rng(20261125).standard_normal((DRAWS // 2, 2, 2))
 _Z = np.concatenate([_Z, -_Z])  # antithetic: the draws' mean is exactly 0
