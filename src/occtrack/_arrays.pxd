@@ -9,7 +9,7 @@ linked between extensions.
     out = new_doubles(1, n)               # numpy.empty(n)
 
 Also Python's max and min of two numbers as numba compiled them (`py_max`, `py_min`,
-`py_imax`, `py_imin`) and numpy's stable argsort (`argsort_stable`, `argsort_stable_i64`),
+`py_imax`, `py_imin`) and numpy's stable argsort (`argsort_stable`, for float64 or int64 keys),
 which every extension shares.
 """
 
@@ -126,11 +126,16 @@ cdef inline cnp.ndarray zero_booleans(int ndim, Py_ssize_t n0, Py_ssize_t n1=0):
     return _new(cnp.NPY_BOOL, ndim, n0, n1, 0, True)
 
 
-cdef inline void argsort_stable(const f64* key, Py_ssize_t n, i64* order,
+ctypedef fused sort_key:
+    f64
+    i64
+
+
+cdef inline void argsort_stable(const sort_key* key, Py_ssize_t n, i64* order,
                                 i64* work) noexcept nogil:
-    """order = numpy.argsort(key[:n], kind="stable") (NaN keys last), by a bottom-up merge
-    sort of indices; `work` holds n int64. A stable sort has one answer, so this equals
-    numba's and numpy's mergesort to the index."""
+    """order = numpy.argsort(key[:n], kind="stable") of float64 or int64 keys (NaN keys last),
+    by a bottom-up merge sort of indices; `work` holds n int64. A stable sort has one
+    answer, so this equals numba's and numpy's mergesort to the index."""
     cdef Py_ssize_t i, width, lo, mid, hi, a, b, k
     cdef i64* src = order
     cdef i64* dst = work
@@ -148,48 +153,6 @@ cdef inline void argsort_stable(const f64* key, Py_ssize_t n, i64* order,
                 # take from the right only when strictly smaller (stability); NaN is largest
                 if key[src[b]] < key[src[a]] or (key[src[a]] != key[src[a]]
                                                  and key[src[b]] == key[src[b]]):
-                    dst[k] = src[b]
-                    b += 1
-                else:
-                    dst[k] = src[a]
-                    a += 1
-                k += 1
-            while a < mid:
-                dst[k] = src[a]
-                a += 1
-                k += 1
-            while b < hi:
-                dst[k] = src[b]
-                b += 1
-                k += 1
-            lo = hi
-        tmp = src
-        src = dst
-        dst = tmp
-        width *= 2
-    if src != order:
-        for i in range(n):
-            order[i] = src[i]
-
-
-cdef inline void argsort_stable_i64(const i64* key, Py_ssize_t n, i64* order,
-                                    i64* work) noexcept nogil:
-    """order = numpy.argsort(key[:n], kind="stable") for int64 keys (as `argsort_stable`)."""
-    cdef Py_ssize_t i, width, lo, mid, hi, a, b, k
-    cdef i64* src = order
-    cdef i64* dst = work
-    cdef i64* tmp
-    for i in range(n):
-        order[i] = i
-    width = 1
-    while width < n:
-        lo = 0
-        while lo < n:
-            mid = lo + width if lo + width < n else n
-            hi = lo + 2 * width if lo + 2 * width < n else n
-            a, b, k = lo, mid, lo
-            while a < mid and b < hi:
-                if key[src[b]] < key[src[a]]:
                     dst[k] = src[b]
                     b += 1
                 else:

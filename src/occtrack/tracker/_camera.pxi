@@ -424,7 +424,7 @@ def _candidates(object i, object j, object hp, object hc, object cp, object cc,
     for t in range(K):
         key[t] = pi[keep[t]] * M + pj[keep[t]]
     # (numba's default-kind argsort here: the keys are distinct pairs, so any sort agrees)
-    argsort_stable_i64(key, K, order, idata(work_))
+    argsort_stable(key, K, order, idata(work_))
     candidates_, unit_ = new_doubles(2, K, 2), new_doubles(1, K)
     cdef f64* candidates = fdata(candidates_)
     cdef f64* unit = fdata(unit_)
@@ -559,7 +559,7 @@ cdef int _votes_c(const f64* x, const f64* y, const f64* radius, Py_ssize_t C,
     cdef i64* by_strip = idata(by_strip_)
     for k in range(C):
         key[k] = strip[first[k]]
-    argsort_stable_i64(key, C, by_strip, work)
+    argsort_stable(key, C, by_strip, work)
     for k in range(C):
         order[k] = first[by_strip[k]]
     strips = strip[order[C - 1]] + 1

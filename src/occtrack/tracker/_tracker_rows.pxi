@@ -131,7 +131,7 @@ def _reported(object r, object means, object centre_std, object used, object too
     cdef i64* ids = idata(ids_)
     for t in range(n):
         ids[t] = ri[shown[t]]
-    argsort_stable_i64(ids, n, order, work)
+    argsort_stable(ids, n, order, work)
     out_ = new_integers(1, n)
     cdef i64* out = idata(out_)
     for t in range(n):

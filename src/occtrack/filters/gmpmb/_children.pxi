@@ -55,7 +55,7 @@ cdef tuple _child_parents_c(const i64* keep_in, Py_ssize_t K, Py_ssize_t n, cons
         else:
             parent[c], j[c] = pk[keep_in[c] - n], pj[keep_in[c] - n]
         key[c] = parent[c] * (M + 1) + j[c] + 1
-    argsort_stable_i64(key, K, order, ip(work_))
+    argsort_stable(key, K, order, ip(work_))
     cdef cnp.ndarray keep_out_ = new_integers(1, K), parent_out_ = new_integers(1, K)
     cdef cnp.ndarray j_out_ = new_integers(1, K), mass_ = new_doubles(1, K)
     cdef i64* keep_out = ip(keep_out_)
@@ -111,7 +111,7 @@ cdef cnp.ndarray _trim_c(f64* mass, const i64* label, const i64* measurement, Py
     cdef i64* ranked = order + 3 * n
     cdef cnp.ndarray negative_ = new_doubles(1, n)
     cdef f64* negative = fp(negative_)
-    argsort_stable_i64(key, n, order, work)
+    argsort_stable(key, n, order, work)
     cdef Py_ssize_t first = 0, last, size, rank, i
     cdef const i64* members
     cdef double total, kept_total, scale

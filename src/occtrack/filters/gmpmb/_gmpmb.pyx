@@ -22,7 +22,6 @@ from libc.string cimport memcpy
 from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (
     argsort_stable,
-    argsort_stable_i64,
     b8,
     booleans,
     dim,

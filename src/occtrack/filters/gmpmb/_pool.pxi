@@ -68,7 +68,7 @@ def _sort_pool(mass, mean, cov, det, occ, coast, label):
         return
     cdef cnp.ndarray order_ = new_integers(1, n), work_ = new_integers(1, n)
     cdef i64* order = ip(order_)
-    argsort_stable_i64(lab, n, order, ip(work_))
+    argsort_stable(lab, n, order, ip(work_))
     for i in range(n):
         if order[i] != i:
             break
@@ -140,7 +140,7 @@ cdef tuple _packed_order_c(const i64* key, Py_ssize_t n, Py_ssize_t width):
             packed[k] = packed[k] * span[c] + (key[k * width + c] - low[c])
     cdef cnp.ndarray order_ = new_integers(1, n), work_ = new_integers(1, n)
     cdef i64* order = ip(order_)
-    argsort_stable_i64(packed, n, order, ip(work_))
+    argsort_stable(packed, n, order, ip(work_))
     cdef cnp.ndarray start_ = new_booleans(1, n)
     cdef b8* start = bp(start_)
     start[0] = True
