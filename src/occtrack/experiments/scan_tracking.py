@@ -10,10 +10,10 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
   from a clutter return, does not end it. For each spell shorter than `max_spell` s with the
   person in the scene on both sides (seen the scan before and the scan after), the person is
   matched to a track at the scan just before the spell and at the first scan after it (per
-  scan, the assignment that minimises the summed distance over the pairs closer than `match`
-  m, scipy's linear_sum_assignment); kept when both matches exist and name the same track.
-  Spells at the start or the end of the scene or of the person's walk (entering or leaving
-  while hidden) are left out; those whose person was matched to no track going in count as
+  scan, `match`: the assignment that minimises the summed distance over the pairs closer than
+  `cutoff` m, scipy's linear_sum_assignment); kept when both matches exist and name the same
+  track. Spells at the start or the end of the scene or of the person's walk (entering or
+  leaving while hidden) are left out; those whose person was matched to no track going in count as
   not kept (`entered`: those matched going in); the spells of 1 to 2 s also on their own (a
   spell's duration is from its first to its last unseen scan, so a one-scan spell lasts 0 s).
   `strict_spells` / `strict_kept`: the same count over the spells of the scene's flag alone
@@ -21,7 +21,7 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
 - HOTA on positions (`occtrack.metrics.hota_points`): TrackEval's HOTA with the similarity
   max(0, 1 - d / `cutoff`) in place of IoU (alpha 0.5: within half a metre), with DetA and AssA.
 - ECE of the tracks' confidence (`occtrack.metrics.reliability`, 10 bins): a reported track
-  is right when matched (as below) to a person within one radius of its centre, the event its
+  is right when matched (as above) to a person within one radius of its centre, the event its
   confidence is the probability of.
 - Identity switches: a person matched (as above, every scan) to another track than the one
   it was last matched to.
