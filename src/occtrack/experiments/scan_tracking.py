@@ -13,8 +13,8 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
   scan, `match`: the assignment that minimises the summed distance over the pairs closer than
   `cutoff` m, scipy's linear_sum_assignment); kept when both matches exist and name the same
   track. Spells at the start or the end of the scene or of the person's walk (entering or
-  leaving while hidden) are left out; those whose person was matched to no track going in count as
-  not kept (`entered`: those matched going in); the spells of 1 to 2 s also on their own (a
+  leaving while hidden) are left out; those whose person was matched to no track going in
+  count as not kept (`entered`: those matched going in); the spells of 1 to 2 s also on their own (a
   spell's duration is from its first to its last unseen scan, so a one-scan spell lasts 0 s).
   `strict_spells` / `strict_kept`: the same count over the spells of the scene's flag alone
   (every fully occluded run, so a glimpse splits a spell in two).
