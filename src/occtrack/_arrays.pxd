@@ -80,50 +80,74 @@ cdef inline b8* booleans(object a, int ndim, str name) except NULL:
     return <b8*>_data(a, cnp.NPY_BOOL, ndim, name, "bool")
 
 
+cdef inline f64* fdata(object a) noexcept:
+    """The data of a float64 array already checked (or made here)."""
+    return <f64*>cnp.PyArray_DATA(<cnp.ndarray>a)
+
+
+cdef inline i64* idata(object a) noexcept:
+    """The data of an int64 array already checked (or made here)."""
+    return <i64*>cnp.PyArray_DATA(<cnp.ndarray>a)
+
+
+cdef inline b8* bdata(object a) noexcept:
+    """The data of a bool array already checked (or made here)."""
+    return <b8*>cnp.PyArray_DATA(<cnp.ndarray>a)
+
+
+cdef inline Py_ssize_t length(object a, Py_ssize_t n, str name) except -1:
+    """n, if the (checked) array a has n rows (n values, for a 1-d array)."""
+    cdef Py_ssize_t m = cnp.PyArray_DIM(<cnp.ndarray>a, 0)
+    if m != n:
+        raise ValueError(f"{name}: {n} rows are needed, not {m}")
+    return n
+
+
 cdef inline Py_ssize_t dim(object a, int axis) noexcept:
     """The length of (checked) array a along `axis`."""
     return cnp.PyArray_DIM(<cnp.ndarray>a, axis)
 
 
 cdef inline cnp.ndarray _new(int typenum, int ndim, Py_ssize_t n0, Py_ssize_t n1,
-                             Py_ssize_t n2, bint zero):
-    cdef cnp.npy_intp shape[3]
+                             Py_ssize_t n2, Py_ssize_t n3, bint zero):
+    cdef cnp.npy_intp shape[4]
     shape[0] = n0
     shape[1] = n1
     shape[2] = n2
+    shape[3] = n3
     if zero:
         return cnp.PyArray_ZEROS(ndim, shape, typenum, 0)
     return cnp.PyArray_EMPTY(ndim, shape, typenum, 0)
 
 
 cdef inline cnp.ndarray new_doubles(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
-                                    Py_ssize_t n2=0):
-    """numpy.empty((n0[, n1[, n2]])) of float64."""
-    return _new(cnp.NPY_FLOAT64, ndim, n0, n1, n2, False)
+                                    Py_ssize_t n2=0, Py_ssize_t n3=0):
+    """numpy.empty((n0[, n1[, n2[, n3]]])) of float64."""
+    return _new(cnp.NPY_FLOAT64, ndim, n0, n1, n2, n3, False)
 
 
 cdef inline cnp.ndarray zero_doubles(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
-                                     Py_ssize_t n2=0):
-    """numpy.zeros((n0[, n1[, n2]])) of float64."""
-    return _new(cnp.NPY_FLOAT64, ndim, n0, n1, n2, True)
+                                     Py_ssize_t n2=0, Py_ssize_t n3=0):
+    """numpy.zeros((n0[, n1[, n2[, n3]]])) of float64."""
+    return _new(cnp.NPY_FLOAT64, ndim, n0, n1, n2, n3, True)
 
 
 cdef inline cnp.ndarray new_integers(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
                                      Py_ssize_t n2=0):
-    return _new(cnp.NPY_INT64, ndim, n0, n1, n2, False)
+    return _new(cnp.NPY_INT64, ndim, n0, n1, n2, 0, False)
 
 
 cdef inline cnp.ndarray zero_integers(int ndim, Py_ssize_t n0, Py_ssize_t n1=0,
                                       Py_ssize_t n2=0):
-    return _new(cnp.NPY_INT64, ndim, n0, n1, n2, True)
+    return _new(cnp.NPY_INT64, ndim, n0, n1, n2, 0, True)
 
 
 cdef inline cnp.ndarray new_booleans(int ndim, Py_ssize_t n0, Py_ssize_t n1=0):
-    return _new(cnp.NPY_BOOL, ndim, n0, n1, 0, False)
+    return _new(cnp.NPY_BOOL, ndim, n0, n1, 0, 0, False)
 
 
 cdef inline cnp.ndarray zero_booleans(int ndim, Py_ssize_t n0, Py_ssize_t n1=0):
-    return _new(cnp.NPY_BOOL, ndim, n0, n1, 0, True)
+    return _new(cnp.NPY_BOOL, ndim, n0, n1, 0, 0, True)
 
 
 ctypedef fused sort_key:

@@ -8,16 +8,10 @@ Written as the numba loop it replaces read, on pointers: a `def` entry checks ea
 
 cimport numpy as cnp
 
+from occtrack._arrays cimport bdata, fdata, idata, length
 from occtrack._arrays cimport dim, doubles, f64, i64, integers, new_integers
 
 cnp.import_array()
-
-
-cdef inline Py_ssize_t _length(object a, Py_ssize_t n, str name) except -1:
-    """n, if the (checked) array a has n rows."""
-    if dim(a, 0) != n:
-        raise ValueError(f"{name}: {n} rows are needed, not {dim(a, 0)}")
-    return n
 
 
 def _sweep(a_x0, a_y0, a_y1, s_x1, s_y0, s_y1, order, start, stop):
@@ -33,13 +27,13 @@ def _sweep(a_x0, a_y0, a_y1, s_x1, s_y0, s_y1, order, start, stop):
     cdef const i64* lo = integers(start, 1, "start")
     cdef const i64* hi = integers(stop, 1, "stop")
     cdef Py_ssize_t N = dim(start, 0), S = dim(order, 0), i, k, found = 0, total = 0
-    _length(stop, N, "stop")
-    _length(a_x0, N, "a_x0")
-    _length(a_y0, N, "a_y0")
-    _length(a_y1, N, "a_y1")
-    _length(s_x1, S, "s_x1")
-    _length(s_y0, S, "s_y0")
-    _length(s_y1, S, "s_y1")
+    length(stop, N, "stop")
+    length(a_x0, N, "a_x0")
+    length(a_y0, N, "a_y0")
+    length(a_y1, N, "a_y1")
+    length(s_x1, S, "s_x1")
+    length(s_y0, S, "s_y0")
+    length(s_y1, S, "s_y1")
     for i in range(N):
         if hi[i] > lo[i] and (lo[i] < 0 or hi[i] > S):
             raise IndexError(f"start, stop: [{lo[i]}, {hi[i]}) is not within {S}")

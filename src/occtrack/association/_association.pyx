@@ -13,25 +13,11 @@ the kernels themselves touch no Python object.
 cimport numpy as cnp
 from libc.math cimport fabs
 
+from occtrack._arrays cimport bdata, fdata, idata, length
 from occtrack._arrays cimport (b8, dim, doubles, f64, i64, integers, new_booleans,
                                new_doubles, new_integers, zero_doubles, zero_integers)
 
 cnp.import_array()
-
-
-cdef inline Py_ssize_t _length(object a, Py_ssize_t n, str name) except -1:
-    """n, if the (checked) array a has n values."""
-    if dim(a, 0) != n:
-        raise ValueError(f"{name}: {n} values are needed, not {dim(a, 0)}")
-    return n
-
-
-cdef inline f64* _f(cnp.ndarray a) noexcept:
-    return <f64*>cnp.PyArray_DATA(a)
-
-
-cdef inline i64* _i(cnp.ndarray a) noexcept:
-    return <i64*>cnp.PyArray_DATA(a)
 
 
 # ---- the kernels ----------------------------------------------------------------------------
@@ -47,11 +33,11 @@ cdef i64 _iterate_clusters_c(const i64* rows, const i64* cols, const f64* ratio,
     cdef cnp.ndarray start_ = zero_integers(1, C + 1), s_ = new_doubles(1, E)
     cdef cnp.ndarray mu_ = new_doubles(1, E), total_ = zero_doubles(1, n)
     cdef cnp.ndarray into_ = zero_doubles(1, m), live_ = new_booleans(1, C)
-    cdef i64* start = _i(start_)
-    cdef f64* s = _f(s_)
-    cdef f64* mu = _f(mu_)
-    cdef f64* total = _f(total_)
-    cdef f64* into = _f(into_)
+    cdef i64* start = idata(start_)
+    cdef f64* s = fdata(s_)
+    cdef f64* mu = fdata(mu_)
+    cdef f64* total = fdata(total_)
+    cdef f64* into = fdata(into_)
     cdef b8* live = <b8*>cnp.PyArray_DATA(live_)
     cdef Py_ssize_t c, e, remaining = C
     cdef i64 iterations = 0
@@ -123,8 +109,8 @@ cdef tuple _marginals_new(const i64* rows, const i64* cols, const f64* ratio,
     cdef cnp.ndarray to_new = zero_doubles(1, m)
     cdef cnp.ndarray p_hit = new_doubles(1, E), p_miss = new_doubles(1, n)
     cdef cnp.ndarray p_new = new_doubles(1, m)
-    _marginals_c(rows, cols, ratio, grouped, order, w_new, E, n, m, _f(s), _f(total),
-                 _f(to_new), _f(p_hit), _f(p_miss), _f(p_new))
+    _marginals_c(rows, cols, ratio, grouped, order, w_new, E, n, m, fdata(s), fdata(total),
+                 fdata(to_new), fdata(p_hit), fdata(p_miss), fdata(p_new))
     return p_hit, p_miss, p_new
 
 
@@ -139,22 +125,22 @@ def _one_cluster(rows, cols, w_hit, w_miss, w_new, double tol, i64 max_iter):
     cdef const f64* hit = doubles(w_hit, 1, "w_hit")
     cdef const f64* miss = doubles(w_miss, 1, "w_miss")
     cdef const f64* wnew = doubles(w_new, 1, "w_new")
-    _length(cols, E, "cols")
-    _length(w_hit, E, "w_hit")
+    length(cols, E, "cols")
+    length(w_hit, E, "w_hit")
     cdef Py_ssize_t n = dim(w_miss, 0), m = dim(w_new, 0)
     cdef cnp.ndarray ratio_ = new_doubles(1, E), new_ = new_doubles(1, E)
     cdef cnp.ndarray nu_ = new_doubles(1, E), order_ = new_integers(1, E)
-    cdef f64* ratio = _f(ratio_)
-    cdef f64* new = _f(new_)
-    cdef i64* order = _i(order_)
+    cdef f64* ratio = fdata(ratio_)
+    cdef f64* new = fdata(new_)
+    cdef i64* order = idata(order_)
     cdef i64 size = E
     for e in range(E):
         ratio[e] = hit[e] / miss[r[e]]
         new[e] = wnew[k[e]]
         order[e] = e
     iterations = _iterate_clusters_c(r, k, ratio, new, &size, E, 1, n, m, tol, max_iter,
-                                     _f(nu_))
-    return _marginals_new(r, k, ratio, _f(nu_), order, wnew, E, n, m) + (iterations,)
+                                     fdata(nu_))
+    return _marginals_new(r, k, ratio, fdata(nu_), order, wnew, E, n, m) + (iterations,)
 
 
 def _iterate_clusters(rows, cols, ratio, new, sizes, Py_ssize_t n, Py_ssize_t m, double tol,
@@ -168,12 +154,12 @@ def _iterate_clusters(rows, cols, ratio, new, sizes, Py_ssize_t n, Py_ssize_t m,
     cdef const f64* q = doubles(ratio, 1, "ratio")
     cdef const f64* w = doubles(new, 1, "new")
     cdef const i64* z = integers(sizes, 1, "sizes")
-    _length(cols, E, "cols")
-    _length(ratio, E, "ratio")
-    _length(new, E, "new")
+    length(cols, E, "cols")
+    length(ratio, E, "ratio")
+    length(new, E, "new")
     nu = new_doubles(1, E)
     iterations = _iterate_clusters_c(r, k, q, w, z, E, dim(sizes, 0), n, m, tol, max_iter,
-                                     _f(nu))
+                                     fdata(nu))
     return nu, iterations
 
 
@@ -189,8 +175,8 @@ def _marginals(rows, cols, ratio, grouped, order, w_new, Py_ssize_t n):
     cdef const f64* g = doubles(grouped, 1, "grouped")
     cdef const i64* o = integers(order, 1, "order")
     cdef const f64* w = doubles(w_new, 1, "w_new")
-    _length(cols, E, "cols")
-    _length(ratio, E, "ratio")
-    _length(grouped, E, "grouped")
-    _length(order, E, "order")
+    length(cols, E, "cols")
+    length(ratio, E, "ratio")
+    length(grouped, E, "grouped")
+    length(order, E, "order")
     return _marginals_new(r, k, q, g, o, w, E, n, dim(w_new, 0))

@@ -13,7 +13,7 @@ def _components(object extent, double inward_speed, double speed_std, double edg
         raise ValueError("_components: extent, size_mean and size_std of 2 values are needed")
     cdef cnp.ndarray mass_ = new_doubles(1, 5)
     cdef cnp.ndarray means_ = zero_doubles(3, 5, 2, 3)
-    cdef cnp.ndarray covs_ = _doubles4(5, 2, 3, 3, True)  # (_box.pxi)
+    cdef cnp.ndarray covs_ = zero_doubles(4, 5, 2, 3, 3)
     cdef cnp.ndarray sds_ = zero_doubles(3, 5, 2, 3)
     cdef f64* mass = <f64*>cnp.PyArray_DATA(mass_)
     cdef f64* means = <f64*>cnp.PyArray_DATA(means_)

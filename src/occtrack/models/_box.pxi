@@ -8,16 +8,6 @@ cdef double _BOX_MIN_HEIGHT = 4.0  # box.MIN_HEIGHT
 cdef double _BOX_LOG_2PI = 1.8378770664093453  # densities.gaussian.LOG_2PI: log(2 pi)
 
 
-cdef cnp.ndarray _doubles4(Py_ssize_t n0, Py_ssize_t n1, Py_ssize_t n2, Py_ssize_t n3,
-                           bint zero):
-    """numpy.empty or numpy.zeros((n0, n1, n2, n3)) of float64 (`new_doubles` goes to 3-d)."""
-    cdef cnp.npy_intp shape[4]
-    shape[0], shape[1], shape[2], shape[3] = n0, n1, n2, n3
-    if zero:
-        return cnp.PyArray_ZEROS(4, shape, cnp.NPY_FLOAT64, 0)
-    return cnp.PyArray_EMPTY(4, shape, cnp.NPY_FLOAT64, 0)
-
-
 cdef int _box_shape(object a, int ndim, str name, Py_ssize_t d1, Py_ssize_t d2=0,
                     Py_ssize_t d3=0) except -1:
     """Check a's (checked) dimensions after the first: (., d1[, d2[, d3]])."""
@@ -310,7 +300,7 @@ def _innovation(object means, object covs, double edge_noise):
     _box_shape(covs, 4, "covs", 2, 3, 3)
     cdef Py_ssize_t K = dim(means, 0), k, axis
     cdef cnp.ndarray zhat_ = new_doubles(3, K, 2, 2)
-    cdef cnp.ndarray S_ = _doubles4(K, 2, 2, 2, False)
+    cdef cnp.ndarray S_ = new_doubles(4, K, 2, 2, 2)
     cdef f64* zhat = <f64*>cnp.PyArray_DATA(zhat_)
     cdef f64* S = <f64*>cnp.PyArray_DATA(S_)
     cdef const f64* m

@@ -91,7 +91,7 @@ def _visible_pairs(hidden, occluders, k, n, weights, skip, double gain, double r
     cdef const i64* s = integers(skip, 1, "skip")
     cdef Py_ssize_t K = dim(hidden, 0), N = dim(occluders, 0), E = dim(k, 0), e
     cdef Py_ssize_t n_weights = dim(weights, 0), n_skip = dim(skip, 0)
-    _length(n, E, "n")
+    length(n, E, "n")
     _check_weights_skip(n_weights, N, n_skip, K)
     cdef double p
     log_visible_ = zero_doubles(1, K)

@@ -26,6 +26,7 @@ from libc.float cimport DBL_MIN
 from libc.math cimport (INFINITY, asin, atan2, ceil, erfc, exp, expm1, floor, hypot, log,
                         log1p, sqrt)
 
+from occtrack._arrays cimport bdata, fdata, idata, length
 from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (b8, dim, doubles, f64, i64, integers, new_doubles,
                                new_integers, zero_booleans, zero_doubles, zero_integers)
@@ -46,13 +47,6 @@ cdef extern from *:
     """
     double ZERO "occtrack_zero"
     double ONE "occtrack_one"
-
-
-cdef inline Py_ssize_t _length(object a, Py_ssize_t n, str name) except -1:
-    """n, if the (checked) array a has n rows."""
-    if dim(a, 0) != n:
-        raise ValueError(f"{name}: {n} rows are needed, not {dim(a, 0)}")
-    return n
 
 
 cdef inline f64* _boxes(object a, str name) except NULL:

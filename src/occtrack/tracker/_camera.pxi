@@ -85,8 +85,8 @@ def _first_best(object group, object value, object other, Py_ssize_t size):
     cdef const f64* v = doubles(value, 1, "value")
     cdef const i64* o = integers(other, 1, "other")
     cdef Py_ssize_t E = dim(group, 0)
-    same_length(dim(value, 0), E, "value")
-    same_length(dim(other, 0), E, "other")
+    length(value, E, "value")
+    length(other, E, "other")
     best_value, best_index = new_doubles(1, size), new_integers(1, size)
     seen = new_booleans(1, size)
     _first_best_c(g, v, o, E, size, fdata(best_value), idata(best_index), bdata(seen))
@@ -248,7 +248,7 @@ def _expansion_fit(object pairs, object which, object previous, object current, 
     cdef const f64* ce = doubles(centre, 1, "centre")
     cdef Py_ssize_t P = dim(pairs, 0)
     cdef double k, variance
-    same_length(dim(which, 0), P, "which")
+    length(which, P, "which")
     lever = new_doubles(2, P, 2)
     found = _expansion_fit_c(d, w, P, pv, cu, ce, fdata(lever), &k, &variance)
     return found, k, variance
@@ -409,7 +409,7 @@ def _candidates(object i, object j, object hp, object hc, object cp, object cc,
     cdef Py_ssize_t E = dim(i, 0), e, t, K = 0
     cdef i64 a, b
     cdef double root, inverse_ratio = 1.0 / height_ratio
-    same_length(dim(j, 0), E, "j")
+    length(j, E, "j")
     keep_ = new_integers(1, E)
     cdef i64* keep = idata(keep_)
     for e in range(E):
@@ -453,7 +453,7 @@ def _mutual_shifts(object p, object c, object moved, object current, object cp, 
     cdef const f64* c_c = doubles(cc, 2, "cc")
     cdef Py_ssize_t E = dim(p, 0), N = dim(moved, 0), M = dim(current, 0), e, k, P = 0
     cdef i64 b
-    same_length(dim(c, 0), E, "c")
+    length(c, E, "c")
     overlap_ = new_doubles(1, E)
     cdef f64* overlap = fdata(overlap_)
     for e in range(E):
@@ -527,7 +527,7 @@ def _mode_shift(object candidates, object radius):
     cdef Py_ssize_t C = dim(candidates, 0)
     if dim(candidates, 1) != 2:
         raise ValueError("candidates: (C, 2) are needed")
-    same_length(dim(radius, 0), C, "radius")
+    length(radius, C, "radius")
     out = new_doubles(1, 2)
     _mode_shift_c(c, C, r, fdata(out))
     return out
@@ -620,8 +620,8 @@ def _votes(object x, object y, object radius):
     cdef const f64* py = doubles(y, 1, "y")
     cdef const f64* pr = doubles(radius, 1, "radius")
     cdef Py_ssize_t C = dim(x, 0)
-    same_length(dim(y, 0), C, "y")
-    same_length(dim(radius, 0), C, "radius")
+    length(y, C, "y")
+    length(radius, C, "radius")
     votes = new_integers(1, C)
     _votes_c(px, py, pr, C, idata(votes))
     return votes

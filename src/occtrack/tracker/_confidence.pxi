@@ -47,10 +47,10 @@ cdef int check_components(object label, object mass, object mean, object cov, ob
     doubles(r, 1, "r")
     doubles(means, 3, "means")
     cdef Py_ssize_t K = dim(label, 0)
-    same_length(dim(mass, 0), K, "mass")
-    same_length(dim(mean, 0), K, "mean")
-    same_length(dim(cov, 0), K, "cov")
-    same_length(dim(means, 0), dim(r, 0), "means")
+    length(mass, K, "mass")
+    length(mean, K, "mean")
+    length(cov, K, "cov")
+    length(means, dim(r, 0), "means")
     if (dim(mean, 1) != 2 or dim(mean, 2) != 3 or dim(cov, 1) != 2 or dim(cov, 2) != 3
             or dim(cov, 3) != 3 or dim(means, 1) != 2 or dim(means, 2) != 3):
         raise ValueError("mean (K, 2, 3), cov (K, 2, 3, 3) and means (L, 2, 3) are needed")
@@ -109,9 +109,9 @@ def _report_confidence(object label, object mass, object mean, object cov, objec
     cdef const f64* co = doubles(coast, 1, "coast")
     cdef const f64* ic = doubles(image_centre, 1, "image_centre")
     cdef Py_ssize_t L = dim(r, 0), K = dim(shown, 0), a, k, axis, t
-    same_length(dim(boxes, 0), K, "boxes")
-    same_length(dim(detected, 0), K, "detected")
-    same_length(dim(coast, 0), L, "coast")
+    length(boxes, K, "boxes")
+    length(detected, K, "detected")
+    length(coast, L, "coast")
     cdef const f64* rr = fdata(r)
     cdef const f64* mm = fdata(means)
     cdef double add_centre, add_half
@@ -178,10 +178,10 @@ def _overlap_probability(object centre, object half, object covariance, object r
     cdef const f64* re = doubles(reach, 3, "reach")
     cdef const f64* ne = doubles(need, 1, "need")
     cdef Py_ssize_t n = dim(centre, 0), S = dim(z, 0), B = dim(reach, 0)
-    same_length(dim(half, 0), n, "half")
-    same_length(dim(covariance, 0), n, "covariance")
-    same_length(dim(reported, 0), n, "reported")
-    same_length(dim(need, 0), n, "need")
+    length(half, n, "half")
+    length(covariance, n, "covariance")
+    length(reported, n, "reported")
+    length(need, n, "need")
     if (dim(centre, 1) != 2 or dim(half, 1) != 2 or dim(reported, 1) != 4
             or dim(covariance, 1) != 2 or dim(covariance, 2) != 2 or dim(covariance, 3) != 2
             or dim(z, 1) != 2 or dim(z, 2) != 2 or dim(reach, 1) != 2 or dim(reach, 2) != 2):

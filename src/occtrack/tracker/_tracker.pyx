@@ -25,6 +25,7 @@ both give numba's numbers to the bit.
 cimport numpy as cnp
 from libc.math cimport fabs, floor, isfinite, sqrt
 
+from occtrack._arrays cimport bdata, fdata, idata, length
 from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (
     argsort_stable,
@@ -46,26 +47,6 @@ from occtrack._arrays cimport (
 import numpy as np
 
 cnp.import_array()
-
-
-# ---- the data of checked arrays, and a check of lengths -----------------------------------
-
-cdef inline f64* fdata(object a) noexcept:
-    return <f64*>cnp.PyArray_DATA(<cnp.ndarray>a)
-
-
-cdef inline i64* idata(object a) noexcept:
-    return <i64*>cnp.PyArray_DATA(<cnp.ndarray>a)
-
-
-cdef inline b8* bdata(object a) noexcept:
-    return <b8*>cnp.PyArray_DATA(<cnp.ndarray>a)
-
-
-cdef int same_length(Py_ssize_t n, Py_ssize_t expected, str name) except -1:
-    if n != expected:
-        raise ValueError(f"{name}: {expected} rows are needed, not {n}")
-    return 0
 
 
 include "_boxes.pxi"

@@ -20,10 +20,10 @@ def _report_rows(object shown, object r, object means, object took, object detec
     cdef const f64* bd = doubles(border, 2, "border")
     cdef Py_ssize_t K = dim(shown, 0), L = dim(r, 0), a, k, axis, t
     cdef double lo, size, state_lo, state_hi
-    same_length(dim(means, 0), L, "means")
-    same_length(dim(took, 0), L, "took")
-    same_length(dim(hidden, 0), L, "hidden")
-    same_length(dim(classes, 0), L, "classes")
+    length(means, L, "means")
+    length(took, L, "took")
+    length(hidden, L, "hidden")
+    length(classes, L, "classes")
     if dim(detections, 1) != 4 or dim(border, 0) != 2 or dim(border, 1) != 2:
         raise ValueError("detections (M, 4) and border (2, 2) are needed")
     boxes_, velocities_ = new_doubles(2, K, 4), new_doubles(2, K, 2)
@@ -76,14 +76,14 @@ def _reported(object r, object means, object centre_std, object used, object too
     cdef i64* ri = integers(report_id, 1, "report_id")
     cdef Py_ssize_t L = dim(r, 0), n = 0, fresh = 0, k, i, t
     cdef double height
-    same_length(dim(means, 0), L, "means")
-    same_length(dim(centre_std, 0), L, "centre_std")
-    same_length(dim(used, 0), L, "used")
-    same_length(dim(took, 0), L, "took")
-    same_length(dim(coast, 0), L, "coast")
-    same_length(dim(serial, 0), L, "serial")
-    same_length(dim(reported_serial, 0), L, "reported_serial")
-    same_length(dim(report_id, 0), L, "report_id")
+    length(means, L, "means")
+    length(centre_std, L, "centre_std")
+    length(used, L, "used")
+    length(took, L, "took")
+    length(coast, L, "coast")
+    length(serial, L, "serial")
+    length(reported_serial, L, "reported_serial")
+    length(report_id, L, "report_id")
     shown_ = new_integers(1, L)
     cdef i64* shown = idata(shown_)
     for k in range(L):

@@ -21,14 +21,14 @@ def _children(mass, miss, rows, hit, pj, edge_of_pair, strong, p_hit, L_edge, p_
     cdef Py_ssize_t n = dim(mass, 0), P = dim(hit, 0), A = dim(miss_obj, 0)
     cdef Py_ssize_t E = dim(L_edge, 0), e, s, k, p
     cdef cnp.ndarray edge_factor_ = zero_doubles(1, E)
-    cdef f64* edge_factor = fp(edge_factor_)
+    cdef f64* edge_factor = fdata(edge_factor_)
     s = 0
     for e in range(E):
         if st[e]:
             edge_factor[e] = ph[s] / Le[e]
             s += 1
     cdef cnp.ndarray out_ = new_doubles(1, n + P)
-    cdef f64* out = fp(out_)
+    cdef f64* out = fdata(out_)
     cdef double factor
     for k in range(n):
         factor = pm[ro[k]] / mo[ro[k]] if ro[k] < A else 1.0
@@ -44,10 +44,10 @@ cdef tuple _child_parents_c(const i64* keep_in, Py_ssize_t K, Py_ssize_t n, cons
     cdef cnp.ndarray parent_ = new_integers(1, K), j_ = new_integers(1, K)
     cdef cnp.ndarray key_ = new_integers(1, K), order_ = new_integers(1, K)
     cdef cnp.ndarray work_ = new_integers(1, K)
-    cdef i64* parent = ip(parent_)
-    cdef i64* j = ip(j_)
-    cdef i64* key = ip(key_)
-    cdef i64* order = ip(order_)
+    cdef i64* parent = idata(parent_)
+    cdef i64* j = idata(j_)
+    cdef i64* key = idata(key_)
+    cdef i64* order = idata(order_)
     cdef Py_ssize_t c
     for c in range(K):
         if keep_in[c] < n:
@@ -55,13 +55,13 @@ cdef tuple _child_parents_c(const i64* keep_in, Py_ssize_t K, Py_ssize_t n, cons
         else:
             parent[c], j[c] = pk[keep_in[c] - n], pj[keep_in[c] - n]
         key[c] = parent[c] * (M + 1) + j[c] + 1
-    argsort_stable(key, K, order, ip(work_))
+    argsort_stable(key, K, order, idata(work_))
     cdef cnp.ndarray keep_out_ = new_integers(1, K), parent_out_ = new_integers(1, K)
     cdef cnp.ndarray j_out_ = new_integers(1, K), mass_ = new_doubles(1, K)
-    cdef i64* keep_out = ip(keep_out_)
-    cdef i64* parent_out = ip(parent_out_)
-    cdef i64* j_out = ip(j_out_)
-    cdef f64* mass = fp(mass_)
+    cdef i64* keep_out = idata(keep_out_)
+    cdef i64* parent_out = idata(parent_out_)
+    cdef i64* j_out = idata(j_out_)
+    cdef f64* mass = fdata(mass_)
     for c in range(K):
         keep_out[c] = keep_in[order[c]]
         parent_out[c] = parent[order[c]]
@@ -84,7 +84,7 @@ def _child_parents(keep, Py_ssize_t n, pk, pj, i64 M, children):
 cdef cnp.ndarray _trim_c(f64* mass, const i64* label, const i64* measurement, Py_ssize_t n,
                          Py_ssize_t cap, i64 L):
     cdef cnp.ndarray key_ = new_integers(1, n)
-    cdef i64* key = ip(key_)
+    cdef i64* key = idata(key_)
     cdef i64 top = -1
     cdef Py_ssize_t c
     for c in range(n):
@@ -92,11 +92,11 @@ cdef cnp.ndarray _trim_c(f64* mass, const i64* label, const i64* measurement, Py
                                                  else -1)
         top = py_imax(top, key[c])
     cdef cnp.ndarray keep_ = new_booleans(1, n)
-    cdef b8* keep = bp(keep_)
+    cdef b8* keep = bdata(keep_)
     for c in range(n):
         keep[c] = True
     cdef cnp.ndarray counts_ = zero_integers(1, top + 2)
-    cdef i64* counts = ip(counts_)
+    cdef i64* counts = idata(counts_)
     cdef bint over = False
     for c in range(n):
         if key[c] >= 0:
@@ -105,12 +105,12 @@ cdef cnp.ndarray _trim_c(f64* mass, const i64* label, const i64* measurement, Py
     if not over:
         return keep_
     cdef cnp.ndarray scratch_ = new_integers(2, 4, n)
-    cdef i64* order = ip(scratch_)
+    cdef i64* order = idata(scratch_)
     cdef i64* work = order + n
     cdef i64* rank_order = order + 2 * n
     cdef i64* ranked = order + 3 * n
     cdef cnp.ndarray negative_ = new_doubles(1, n)
-    cdef f64* negative = fp(negative_)
+    cdef f64* negative = fdata(negative_)
     argsort_stable(key, n, order, work)
     cdef Py_ssize_t first = 0, last, size, rank, i
     cdef const i64* members
@@ -172,27 +172,27 @@ def _kept_children(children, selected, double prune_mass, Py_ssize_t n, pk, pj, 
         K = 0
         for c in range(N):
             if ch[c] > prune_mass:
-                ip(keep_)[K] = c
+                idata(keep_)[K] = c
                 K += 1
     else:
         integers(selected, 1, "selected")
         keep_ = <cnp.ndarray>selected
     cdef cnp.ndarray parent_, jj_, mass_, label_of_, trim_
-    keep_, parent_, jj_, mass_ = _child_parents_c(ip(keep_), dim(keep_, 0), n, k_, j_, M, ch)
+    keep_, parent_, jj_, mass_ = _child_parents_c(idata(keep_), dim(keep_, 0), n, k_, j_, M, ch)
     if cap:
         K = dim(parent_, 0)
         label_of_ = new_integers(1, K)
         for c in range(K):
-            ip(label_of_)[c] = lab[ip(parent_)[c]]
-        trim_ = _trim_c(fp(mass_), ip(label_of_), ip(jj_), K, cap, L)
+            idata(label_of_)[c] = lab[idata(parent_)[c]]
+        trim_ = _trim_c(fdata(mass_), idata(label_of_), idata(jj_), K, cap, L)
         i = 0
         for c in range(K):
-            i += bp(trim_)[c] != 0
+            i += bdata(trim_)[c] != 0
         if i < K:
-            keep_, parent_ = _compress_i64(keep_, bp(trim_), K, i), _compress_i64(
-                parent_, bp(trim_), K, i)
-            jj_ = _compress_i64(jj_, bp(trim_), K, i)
-            mass_ = _compress_f64(mass_, bp(trim_), K, i)
+            keep_, parent_ = _compress_i64(keep_, bdata(trim_), K, i), _compress_i64(
+                parent_, bdata(trim_), K, i)
+            jj_ = _compress_i64(jj_, bdata(trim_), K, i)
+            mass_ = _compress_f64(mass_, bdata(trim_), K, i)
     return keep_, parent_, jj_, mass_
 
 
@@ -202,7 +202,7 @@ cdef cnp.ndarray _compress_i64(cnp.ndarray a, const b8* mask, Py_ssize_t K, Py_s
     cdef Py_ssize_t c, i = 0
     for c in range(K):
         if mask[c]:
-            ip(out_)[i] = ip(a)[c]
+            idata(out_)[i] = idata(a)[c]
             i += 1
     return out_
 
@@ -213,7 +213,7 @@ cdef cnp.ndarray _compress_f64(cnp.ndarray a, const b8* mask, Py_ssize_t K, Py_s
     cdef Py_ssize_t c, i = 0
     for c in range(K):
         if mask[c]:
-            fp(out_)[i] = fp(a)[c]
+            fdata(out_)[i] = fdata(a)[c]
             i += 1
     return out_
 
@@ -229,8 +229,8 @@ def _inherit(mean, cov, label, parent, j):
     cdef Py_ssize_t K = dim(parent, 0), c, hits = 0
     cdef cnp.ndarray new_mean_ = take_rows(mean, pa, K), new_cov_ = take_rows(cov, pa, K)
     cdef cnp.ndarray new_label_ = new_integers(1, K), newborn_ = new_integers(1, K)
-    cdef i64* new_label = ip(new_label_)
-    cdef i64* newborn = ip(newborn_)
+    cdef i64* new_label = idata(new_label_)
+    cdef i64* newborn = idata(newborn_)
     for c in range(K):
         newborn[c] = -1
     for c in range(K):
@@ -243,7 +243,7 @@ def _inherit(mean, cov, label, parent, j):
     hits = 0
     for c in range(K):
         if jj[c] >= 0:
-            ip(h_)[hits] = c
+            idata(h_)[hits] = c
             hits += 1
     return new_mean_, new_cov_, new_label_, h_, newborn_
 
@@ -269,9 +269,9 @@ def _child_features(parent, j, det, occ, occ_all, established, v, q, miss, seen_
     cdef Py_ssize_t C = dim(parent, 0), c, k
     cdef cnp.ndarray new_det_ = new_doubles(1, C), new_occ_ = new_doubles(1, C)
     cdef cnp.ndarray new_coast_ = new_doubles(1, C)
-    cdef f64* new_det = fp(new_det_)
-    cdef f64* new_occ = fp(new_occ_)
-    cdef f64* new_coast = fp(new_coast_)
+    cdef f64* new_det = fdata(new_det_)
+    cdef f64* new_occ = fdata(new_occ_)
+    cdef f64* new_coast = fdata(new_coast_)
     cdef double d, o, vv, mm, hidden_if_occludable, escaped, seen_o, missed_o
     for c in range(C):
         k = pa[c]

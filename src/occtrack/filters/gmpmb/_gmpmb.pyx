@@ -19,6 +19,7 @@ from libc.math cimport exp, exp2, floor, log2, rint, sqrt
 from libc.stdint cimport uint64_t
 from libc.string cimport memcpy
 
+from occtrack._arrays cimport bdata, fdata, idata, length
 from occtrack._arrays cimport py_imax, py_imin, py_max, py_min
 from occtrack._arrays cimport (
     argsort_stable,
@@ -53,28 +54,6 @@ cdef inline double npmaximum(double a, double b) noexcept nogil:
     if a != a or b != b:
         return a if a != a else b
     return a if a >= b else b
-
-
-cdef cnp.ndarray doubles4(Py_ssize_t n0, Py_ssize_t n1, Py_ssize_t n2, Py_ssize_t n3,
-                          bint zero):
-    """numpy.zeros or numpy.empty((n0, n1, n2, n3)) of float64."""
-    cdef cnp.npy_intp shape[4]
-    shape[0], shape[1], shape[2], shape[3] = n0, n1, n2, n3
-    if zero:
-        return cnp.PyArray_ZEROS(4, shape, cnp.NPY_FLOAT64, 0)
-    return cnp.PyArray_EMPTY(4, shape, cnp.NPY_FLOAT64, 0)
-
-
-cdef inline f64* fp(cnp.ndarray a) noexcept:
-    return <f64*>cnp.PyArray_DATA(a)
-
-
-cdef inline i64* ip(cnp.ndarray a) noexcept:
-    return <i64*>cnp.PyArray_DATA(a)
-
-
-cdef inline b8* bp(cnp.ndarray a) noexcept:
-    return <b8*>cnp.PyArray_DATA(a)
 
 
 cdef Py_ssize_t row_bytes(object a) noexcept:

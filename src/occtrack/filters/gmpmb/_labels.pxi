@@ -2,7 +2,7 @@
 
 cdef cnp.ndarray _label_sums_c(const i64* label, const f64* mass, Py_ssize_t n, Py_ssize_t L):
     cdef cnp.ndarray r_ = zero_doubles(1, L)
-    cdef f64* r = fp(r_)
+    cdef f64* r = fdata(r_)
     cdef Py_ssize_t k
     for k in range(n):
         if label[k] >= 0:
@@ -22,16 +22,16 @@ cdef tuple _rank_bernoullis_c(const i64* label, const f64* mass, const i64* newb
                               double min_existence):
     cdef cnp.ndarray r_old_ = _label_sums_c(label, mass, n, L)
     cdef cnp.ndarray r_new_ = _label_sums_c(newborn, mass, n, M)
-    cdef const f64* r_old = fp(r_old_)
-    cdef const f64* r_new = fp(r_new_)
+    cdef const f64* r_old = fdata(r_old_)
+    cdef const f64* r_new = fdata(r_new_)
     cdef Py_ssize_t A = 0, B = 0, i, N, count
     for i in range(L):
         A += used[i] != 0
     for i in range(M):
         B += r_new[i] > 0
     cdef cnp.ndarray old_ = new_integers(1, A), new_ = new_integers(1, B)
-    cdef i64* old = ip(old_)
-    cdef i64* new = ip(new_)
+    cdef i64* old = idata(old_)
+    cdef i64* new = idata(new_)
     A = 0
     for i in range(L):
         if used[i]:
@@ -45,21 +45,21 @@ cdef tuple _rank_bernoullis_c(const i64* label, const f64* mass, const i64* newb
     N = A + B
     cdef cnp.ndarray r_all_ = new_doubles(1, N), negative_ = new_doubles(1, N)
     cdef cnp.ndarray order_ = new_integers(1, N), work_ = new_integers(1, N)
-    cdef f64* r_all = fp(r_all_)
-    cdef f64* negative = fp(negative_)
-    cdef i64* order = ip(order_)
+    cdef f64* r_all = fdata(r_all_)
+    cdef f64* negative = fdata(negative_)
+    cdef i64* order = idata(order_)
     for i in range(A):
         r_all[i] = r_old[old[i]]
     for i in range(B):
         r_all[A + i] = r_new[new[i]]
     for i in range(N):
         negative[i] = -r_all[i]
-    argsort_stable(negative, N, order, ip(work_))
+    argsort_stable(negative, N, order, idata(work_))
     count = 0
     for i in range(N):
         count += r_all[order[i]] >= min_existence
     cdef cnp.ndarray ranked_ = new_integers(1, count)
-    cdef i64* ranked = ip(ranked_)
+    cdef i64* ranked = idata(ranked_)
     count = 0
     for i in range(N):
         if r_all[order[i]] >= min_existence:
@@ -80,7 +80,7 @@ def _rank_bernoullis(label, mass, newborn, used, Py_ssize_t M, double min_existe
 
 cdef tuple _split_ranked_c(const i64* ranked, Py_ssize_t R, Py_ssize_t n_old):
     cdef cnp.ndarray keep_old_ = zero_booleans(1, n_old)
-    cdef b8* keep_old = bp(keep_old_)
+    cdef b8* keep_old = bdata(keep_old_)
     cdef Py_ssize_t i, a, count = 0
     cdef i64 value
     for i in range(R):
@@ -89,7 +89,7 @@ cdef tuple _split_ranked_c(const i64* ranked, Py_ssize_t R, Py_ssize_t n_old):
         else:
             count += 1
     cdef cnp.ndarray keep_new_ = new_integers(1, count)
-    cdef i64* keep_new = ip(keep_new_)
+    cdef i64* keep_new = idata(keep_new_)
     count = 0
     for i in range(R):
         if ranked[i] >= n_old:
@@ -126,31 +126,31 @@ def _keep_labels(label, mass, newborn, used, Py_ssize_t M, double min_existence,
     cdef Py_ssize_t n = dim(label, 0), L = dim(used, 0), i, k, R
     cdef cnp.ndarray old_, new_, r_all_, ranked_, keep_old_, keep_new_
     old_, new_, r_all_, ranked_ = _rank_bernoullis_c(lab, m, born, n, u, L, M, min_existence)
-    cdef const i64* old = ip(old_)
-    cdef const i64* new = ip(new_)
-    cdef const f64* r_all = fp(r_all_)
-    cdef const i64* ranked = ip(ranked_)
+    cdef const i64* old = idata(old_)
+    cdef const i64* new = idata(new_)
+    cdef const f64* r_all = fdata(r_all_)
+    cdef const i64* ranked = idata(ranked_)
     cdef Py_ssize_t held = dim(ranked_, 0), n_old = dim(old_, 0)
     R = held
     cdef cnp.ndarray lost_
     if limit and held > limit:
         lost_ = new_doubles(1, held - limit)
         for i in range(held - limit):
-            fp(lost_)[i] = r_all[ranked[limit + i]]
+            fdata(lost_)[i] = r_all[ranked[limit + i]]
         R = limit
     else:
         lost_ = new_doubles(1, 0)
     keep_old_, keep_new_ = _split_ranked_c(ranked, R, n_old)
-    cdef const b8* keep_old = bp(keep_old_)
-    cdef const i64* keep_new = ip(keep_new_)
+    cdef const b8* keep_old = bdata(keep_old_)
+    cdef const i64* keep_new = idata(keep_new_)
     cdef cnp.ndarray gone_ = zero_booleans(1, L)
-    cdef b8* gone = bp(gone_)
+    cdef b8* gone = bdata(gone_)
     for i in range(n_old):
         if not keep_old[i]:
             u[old[i]] = False
             gone[old[i]] = True
     cdef cnp.ndarray out_ = new_integers(1, n)
-    cdef i64* out = ip(out_)
+    cdef i64* out = idata(out_)
     for k in range(n):
         out[k] = lab[k]
         if lab[k] >= 0 and gone[lab[k]]:
@@ -158,7 +158,7 @@ def _keep_labels(label, mass, newborn, used, Py_ssize_t M, double min_existence,
     cdef Py_ssize_t K = dim(keep_new_, 0)
     cdef cnp.ndarray meas_ = new_integers(1, K)
     for i in range(K):
-        ip(meas_)[i] = new[keep_new[i]]
+        idata(meas_)[i] = new[keep_new[i]]
     return out_, meas_, lost_, held
 
 
@@ -181,7 +181,7 @@ def _open_slots(label, newborn, meas, Py_ssize_t M, i64 serial0, used, serial, a
     cdef Py_ssize_t n = dim(label, 0), L = dim(used, 0), n_meas = dim(meas, 0), s, k
     cdef bint one_class = dim(classes, 0) == 0
     cdef cnp.ndarray slot_of_meas_ = new_integers(1, M)
-    cdef i64* slot_of_meas = ip(slot_of_meas_)
+    cdef i64* slot_of_meas = idata(slot_of_meas_)
     for k in range(M):
         slot_of_meas[k] = -1
     cdef Py_ssize_t i = 0
@@ -199,7 +199,7 @@ def _open_slots(label, newborn, meas, Py_ssize_t M, i64 serial0, used, serial, a
             cl[s] = 0 if one_class else cs[ms[i]]
             i += 1
     cdef cnp.ndarray out_ = new_integers(1, n)
-    cdef i64* out = ip(out_)
+    cdef i64* out = idata(out_)
     for k in range(n):
         out[k] = lab[k]
         if born[k] >= 0:
@@ -245,7 +245,7 @@ def _confirm_in_place(used, age, hits, label, i64 window, i64 needed):
     cdef const i64* lab = integers(label, 1, "label")
     cdef Py_ssize_t L = dim(used, 0), n = dim(label, 0), i, k
     cdef cnp.ndarray doomed_ = zero_booleans(1, L)
-    cdef b8* doomed = bp(doomed_)
+    cdef b8* doomed = bdata(doomed_)
     cdef bint any_doomed = False
     for i in range(L):
         if u[i] and hi[i] + py_imax(window - ag[i], 0) < needed:
@@ -253,7 +253,7 @@ def _confirm_in_place(used, age, hits, label, i64 window, i64 needed):
             u[i] = False
             any_doomed = True
     cdef cnp.ndarray keep_ = new_booleans(1, n)
-    cdef b8* keep = bp(keep_)
+    cdef b8* keep = bdata(keep_)
     for k in range(n):
         keep[k] = True
     if any_doomed:
@@ -271,7 +271,7 @@ def _cap_in_place(mass, label, Py_ssize_t L):
     cdef Py_ssize_t n = dim(label, 0), k
     cdef i64 i
     cdef cnp.ndarray r_ = _label_sums_c(lab, m, n, L)
-    cdef const f64* r = fp(r_)
+    cdef const f64* r = fdata(r_)
     for k in range(n):
         i = lab[k]
         if i >= 0 and r[i] > 1.0:
@@ -289,10 +289,10 @@ def _object_moments(label, mass, mean, cov, Py_ssize_t L):
     cdef i64 i
     cdef double share, dev
     cdef cnp.ndarray r_ = _label_sums_c(lab, m, n, L)
-    cdef const f64* r = fp(r_)
+    cdef const f64* r = fdata(r_)
     cdef cnp.ndarray means_ = zero_doubles(3, L, B, d), var_ = zero_doubles(2, L, 2)
-    cdef f64* means = fp(means_)
-    cdef f64* var = fp(var_)
+    cdef f64* means = fdata(means_)
+    cdef f64* var = fdata(var_)
     for k in range(n):
         i = lab[k]
         if i >= 0:
@@ -309,5 +309,5 @@ def _object_moments(label, mass, mean, cov, Py_ssize_t L):
                 var[i * 2 + a] += share * (P[((k * B + a) * d) * d] + dev * dev)
     cdef cnp.ndarray sd_ = new_doubles(2, L, 2)
     for k in range(2 * L):
-        fp(sd_)[k] = sqrt(var[k])
+        fdata(sd_)[k] = sqrt(var[k])
     return r_, means_, sd_

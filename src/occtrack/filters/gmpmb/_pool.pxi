@@ -67,8 +67,8 @@ def _sort_pool(mass, mean, cov, det, occ, coast, label):
                 _rotate_c(arrays[a], n, sizes[a], p, t)
         return
     cdef cnp.ndarray order_ = new_integers(1, n), work_ = new_integers(1, n)
-    cdef i64* order = ip(order_)
-    argsort_stable(lab, n, order, ip(work_))
+    cdef i64* order = idata(order_)
+    argsort_stable(lab, n, order, idata(work_))
     for i in range(n):
         if order[i] != i:
             break
@@ -87,7 +87,7 @@ def _rotate(a, Py_ssize_t p, Py_ssize_t t):
 cdef cnp.ndarray _cell_keys_c(const f64* mean, const i64* label, const f64* cell, Py_ssize_t n,
                               Py_ssize_t B, Py_ssize_t d):
     cdef cnp.ndarray key_ = new_integers(2, n, 8)
-    cdef i64* key = ip(key_)
+    cdef i64* key = idata(key_)
     cdef Py_ssize_t k, axis, r
     cdef double octave, scale
     for k in range(n):
@@ -113,9 +113,9 @@ def _cell_keys(mean, label, cell):
 cdef tuple _packed_order_c(const i64* key, Py_ssize_t n, Py_ssize_t width):
     cdef cnp.ndarray low_ = new_integers(1, width), high_ = new_integers(1, width)
     cdef cnp.ndarray span_ = new_integers(1, width)
-    cdef i64* low = ip(low_)
-    cdef i64* high = ip(high_)
-    cdef i64* span = ip(span_)
+    cdef i64* low = idata(low_)
+    cdef i64* high = idata(high_)
+    cdef i64* span = idata(span_)
     cdef Py_ssize_t k, c, i
     if n == 0:
         return True, new_integers(1, 0), new_booleans(1, 0)
@@ -134,15 +134,15 @@ cdef tuple _packed_order_c(const i64* key, Py_ssize_t n, Py_ssize_t width):
     if not bits < 62:
         return False, zero_integers(1, 0), zero_booleans(1, 0)
     cdef cnp.ndarray packed_ = zero_integers(1, n)
-    cdef i64* packed = ip(packed_)
+    cdef i64* packed = idata(packed_)
     for k in range(n):
         for c in range(width):
             packed[k] = packed[k] * span[c] + (key[k * width + c] - low[c])
     cdef cnp.ndarray order_ = new_integers(1, n), work_ = new_integers(1, n)
-    cdef i64* order = ip(order_)
-    argsort_stable(packed, n, order, ip(work_))
+    cdef i64* order = idata(order_)
+    argsort_stable(packed, n, order, idata(work_))
     cdef cnp.ndarray start_ = new_booleans(1, n)
-    cdef b8* start = bp(start_)
+    cdef b8* start = bdata(start_)
     start[0] = True
     for i in range(1, n):
         start[i] = packed[order[i]] != packed[order[i - 1]]
@@ -166,18 +166,18 @@ cdef tuple _pool_cells_c(const i64* order, const b8* start, Py_ssize_t N, const 
     if N and not start[0]:
         raise ValueError("start: the first entry opens a cell")
     cdef cnp.ndarray out_mass_ = zero_doubles(1, G), out_mean_ = zero_doubles(3, G, B, d)
-    cdef cnp.ndarray out_cov_ = doubles4(G, B, d, d, True)
+    cdef cnp.ndarray out_cov_ = zero_doubles(4, G, B, d, d)
     cdef cnp.ndarray out_det_ = zero_doubles(1, G), out_occ_ = zero_doubles(1, G)
     cdef cnp.ndarray out_coast_ = zero_doubles(1, G), out_label_ = new_integers(1, G)
     cdef cnp.ndarray first_ = new_integers(1, G + 1)
-    cdef f64* out_mass = fp(out_mass_)
-    cdef f64* out_mean = fp(out_mean_)
-    cdef f64* out_cov = fp(out_cov_)
-    cdef f64* out_det = fp(out_det_)
-    cdef f64* out_occ = fp(out_occ_)
-    cdef f64* out_coast = fp(out_coast_)
-    cdef i64* out_label = ip(out_label_)
-    cdef i64* first = ip(first_)
+    cdef f64* out_mass = fdata(out_mass_)
+    cdef f64* out_mean = fdata(out_mean_)
+    cdef f64* out_cov = fdata(out_cov_)
+    cdef f64* out_det = fdata(out_det_)
+    cdef f64* out_occ = fdata(out_occ_)
+    cdef f64* out_coast = fdata(out_coast_)
+    cdef i64* out_label = idata(out_label_)
+    cdef i64* first = idata(first_)
     cdef double total, share, dev_r, dev_c
     g = -1
     for i in range(N):
@@ -244,12 +244,12 @@ def _merge_packed(mean, label, cell, mass, cov, det, occ, coast):
     cdef Py_ssize_t n = dim(mean, 0), B = dim(mean, 1), d = dim(mean, 2), i
     cdef cnp.ndarray key_ = _cell_keys_c(mu, lab, ce, n, B, d)
     cdef cnp.ndarray order_, start_
-    fits, order_, start_ = _packed_order_c(ip(key_), n, 8)
-    cdef const b8* start = bp(start_)
+    fits, order_, start_ = _packed_order_c(idata(key_), n, 8)
+    cdef const b8* start = bdata(start_)
     if fits:
         for i in range(dim(start_, 0)):
             if not start[i]:
-                return True, key_, _pool_cells_c(ip(order_), start, dim(order_, 0), m, mu, P,
+                return True, key_, _pool_cells_c(idata(order_), start, dim(order_, 0), m, mu, P,
                                                  de, oc, co, lab, B, d)
     return fits, key_, (mass, mean, cov, det, occ, coast, label)
 
@@ -270,7 +270,7 @@ def _learnt_sizes(count, total, squares):
     cdef const f64* s = doubles(squares, 1, "squares")
     cdef Py_ssize_t n = dim(total, 0)
     cdef cnp.ndarray mean_ = new_doubles(1, n), std_ = new_doubles(1, n)
-    _learnt_sizes_c(c, t, s, n, fp(mean_), fp(std_))
+    _learnt_sizes_c(c, t, s, n, fdata(mean_), fdata(std_))
     return mean_, std_
 
 
@@ -286,28 +286,28 @@ def _prior_sizes(stats, setting_mean, setting_std):
     cdef cnp.ndarray learnt_mean_ = zero_doubles(1, 2), learnt_std_ = zero_doubles(1, 2)
     if learnt:
         learnt_mean_, learnt_std_ = new_doubles(1, S), new_doubles(1, S)
-        _learnt_sizes_c(st, st + S, st + 2 * S, S, fp(learnt_mean_), fp(learnt_std_))
+        _learnt_sizes_c(st, st + S, st + 2 * S, S, fdata(learnt_mean_), fdata(learnt_std_))
     cdef cnp.ndarray mean_
     if n_mean:
         mean_ = new_doubles(1, n_mean)
         for i in range(n_mean):
-            fp(mean_)[i] = sm[i]
+            fdata(mean_)[i] = sm[i]
     elif learnt:
         mean_ = learnt_mean_
     else:
         mean_ = new_doubles(1, 2)
-        fp(mean_)[0], fp(mean_)[1] = 30.0, 90.0
-    cdef const f64* mean = fp(mean_)
+        fdata(mean_)[0], fdata(mean_)[1] = 30.0, 90.0
+    cdef const f64* mean = fdata(mean_)
     cdef const f64* std = NULL  # (NULL: a third of the mean)
     if n_std:
         std, n_out = ss, n_std
     elif learnt:
-        std, n_out = fp(learnt_std_), dim(learnt_std_, 0)
+        std, n_out = fdata(learnt_std_), dim(learnt_std_, 0)
     else:
         n_out = dim(mean_, 0)
     cdef cnp.ndarray out_ = new_doubles(1, n_out)
     for i in range(n_out):
-        fp(out_)[i] = npmaximum(std[i] if std != NULL else mean[i] / 3.0, 1.0)
+        fdata(out_)[i] = npmaximum(std[i] if std != NULL else mean[i] / 3.0, 1.0)
     return mean_, out_
 
 

@@ -58,7 +58,7 @@ def _predict_in_place(mean, cov, coasting, F, Q, F_coast, Q_coast):
         _check_square(a, d, name)
     cdef cnp.ndarray scratch_ = new_doubles(1, d + d * d)
     _predict_c(mu, P, dim(mean, 0), dim(mean, 1), d, co, NULL, 0.0, F_, Q_, Fc, Qc,
-               fp(scratch_), fp(scratch_) + d)
+               fdata(scratch_), fdata(scratch_) + d)
 
 
 cdef inline void _relax_c(f64* p, Py_ssize_t n, double stationary,
@@ -126,7 +126,7 @@ def _predict_pool(mass, mean, cov, det, occ, coast, double coasting_after, F, Q,
     cdef f64* s = scratch
     if d + d * d > 64:
         scratch_ = new_doubles(1, d + d * d)
-        s = fp(scratch_)
+        s = fdata(scratch_)
     _predict_c(mu, P, n, B, d, NULL, co, coasting_after, F_, Q_, Fc, Qc, s, s + d)
     _relax_c(de, dim(det, 0), det_stationary, det_memory)
     _relax_c(oc, dim(occ, 0), occ_stationary, occ_memory)

@@ -18,13 +18,13 @@ def _occludable(label, mass, occ_all, used, hits, i64 confirm_hits, double stati
     cdef Py_ssize_t n = dim(label, 0), k
     cdef i64 i
     cdef cnp.ndarray r_ = _label_sums_c(lab, m, n, dim(used, 0))
-    cdef const f64* r = fp(r_)
+    cdef const f64* r = fdata(r_)
     cdef cnp.ndarray established_ = zero_booleans(1, n), occ_ = zero_doubles(1, n)
     cdef cnp.ndarray o_seen_ = new_doubles(1, n), within_ = new_doubles(1, n)
-    cdef b8* established = bp(established_)
-    cdef f64* occ = fp(occ_)
-    cdef f64* o_seen = fp(o_seen_)
-    cdef f64* within = fp(within_)
+    cdef b8* established = bdata(established_)
+    cdef f64* occ = fdata(occ_)
+    cdef f64* o_seen = fdata(o_seen_)
+    cdef f64* within = fdata(within_)
     for k in range(n):
         o_seen[k] = stationary
     for k in range(n):
@@ -50,10 +50,10 @@ def _miss_terms(det, occ, visible, hidden):
     cdef Py_ssize_t n = dim(det, 0), k
     cdef cnp.ndarray v_ = new_doubles(1, n), q_ = new_doubles(1, n)
     cdef cnp.ndarray pd_ = new_doubles(1, n), miss_ = new_doubles(1, n)
-    cdef f64* v = fp(v_)
-    cdef f64* q = fp(q_)
-    cdef f64* pd = fp(pd_)
-    cdef f64* miss = fp(miss_)
+    cdef f64* v = fdata(v_)
+    cdef f64* q = fdata(q_)
+    cdef f64* pd = fdata(pd_)
+    cdef f64* miss = fdata(miss_)
     for k in range(n):
         v[k] = py_min(py_max(vis[k], 0.0), 1.0)
         q[k] = py_min(py_max(hid[k], 0.0), 1.0)
@@ -67,7 +67,7 @@ def _clipped(x, double low, double high):
     cdef const f64* xx = doubles(x, 1, "x")
     cdef Py_ssize_t n = dim(x, 0), i
     cdef cnp.ndarray out_ = new_doubles(1, n)
-    cdef f64* out = fp(out_)
+    cdef f64* out = fdata(out_)
     for i in range(n):
         out[i] = py_min(py_max(xx[i], low), high)
     return out_
@@ -82,8 +82,8 @@ def _object_rows(label, used):
     for s in range(L):
         A += u[s] != 0
     cdef cnp.ndarray slots_ = new_integers(1, A), row_of_slot_ = new_integers(1, L)
-    cdef i64* slots = ip(slots_)
-    cdef i64* row_of_slot = ip(row_of_slot_)
+    cdef i64* slots = idata(slots_)
+    cdef i64* row_of_slot = idata(row_of_slot_)
     cdef Py_ssize_t a = 0
     for s in range(L):
         row_of_slot[s] = A
@@ -92,7 +92,7 @@ def _object_rows(label, used):
             row_of_slot[s] = a
             a += 1
     cdef cnp.ndarray rows_ = new_integers(1, n)
-    cdef i64* rows = ip(rows_)
+    cdef i64* rows = idata(rows_)
     for k in range(n):
         rows[k] = row_of_slot[lab[k]] if lab[k] >= 0 else A
     return slots_, rows_
@@ -105,9 +105,9 @@ def _all_pairs(Py_ssize_t n, Py_ssize_t M, rows, Py_ssize_t A):
     cdef const i64* ro = integers(rows, 1, "rows")
     cdef cnp.ndarray pk_ = new_integers(1, n * M), pj_ = new_integers(1, n * M)
     cdef cnp.ndarray cand_of_pair_ = new_integers(1, n * M)
-    cdef i64* pk = ip(pk_)
-    cdef i64* pj = ip(pj_)
-    cdef i64* cand_of_pair = ip(cand_of_pair_)
+    cdef i64* pk = idata(pk_)
+    cdef i64* pj = idata(pj_)
+    cdef i64* cand_of_pair = idata(cand_of_pair_)
     cdef Py_ssize_t k, j, i
     for k in range(n):
         for j in range(M):
@@ -115,8 +115,8 @@ def _all_pairs(Py_ssize_t n, Py_ssize_t M, rows, Py_ssize_t A):
             pj[k * M + j] = j
             cand_of_pair[k * M + j] = ro[k] * M + j
     cdef cnp.ndarray cand_row_ = new_integers(1, A * M), cand_col_ = new_integers(1, A * M)
-    cdef i64* cand_row = ip(cand_row_)
-    cdef i64* cand_col = ip(cand_col_)
+    cdef i64* cand_row = idata(cand_row_)
+    cdef i64* cand_col = idata(cand_col_)
     for i in range(A):
         for j in range(M):
             cand_row[i * M + j] = i
@@ -153,8 +153,8 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, i64 A, P
     cdef Py_ssize_t P = dim(pk, 0), C = dim(cand_row, 0), e, i, k, j, E, K
     cdef bint one_class = dim(classes, 0) == 0
     cdef cnp.ndarray keep_ = zero_booleans(1, P), hit_ = new_doubles(1, P)
-    cdef b8* keep = bp(keep_)
-    cdef f64* hit = fp(hit_)
+    cdef b8* keep = bdata(keep_)
+    cdef f64* hit = fdata(hit_)
     cdef double o, weight, value
     for e in range(P):
         k, j = k_[e], j_[e]
@@ -168,8 +168,8 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, i64 A, P
             keep[e] = True
             hit[e] = value
     cdef cnp.ndarray poisson_hit_ = zero_doubles(1, M), L_cand_ = zero_doubles(1, C)
-    cdef f64* poisson_hit = fp(poisson_hit_)
-    cdef f64* L_cand = fp(L_cand_)
+    cdef f64* poisson_hit = fdata(poisson_hit_)
+    cdef f64* L_cand = fdata(L_cand_)
     for e in range(P):
         if keep[e]:
             if ro[k_[e]] < A:
@@ -177,7 +177,7 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, i64 A, P
             else:
                 poisson_hit[j_[e]] += hit[e]
     cdef cnp.ndarray edge_of_cand_ = new_integers(1, C)
-    cdef i64* edge_of_cand = ip(edge_of_cand_)
+    cdef i64* edge_of_cand = idata(edge_of_cand_)
     E = 0
     for i in range(C):
         edge_of_cand[i] = -1
@@ -186,9 +186,9 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, i64 A, P
             E += 1
     cdef cnp.ndarray e_row_ = new_integers(1, E), e_col_ = new_integers(1, E)
     cdef cnp.ndarray L_edge_ = new_doubles(1, E)
-    cdef i64* e_row = ip(e_row_)
-    cdef i64* e_col = ip(e_col_)
-    cdef f64* L_edge = fp(L_edge_)
+    cdef i64* e_row = idata(e_row_)
+    cdef i64* e_col = idata(e_col_)
+    cdef f64* L_edge = fdata(L_edge_)
     for i in range(C):
         if edge_of_cand[i] >= 0:
             e_row[edge_of_cand[i]] = cr[i]
@@ -199,10 +199,10 @@ def _hit_edges(pk, pj, log_hit, cand_of_pair, cand_row, cand_col, rows, i64 A, P
         K += keep[e]
     cdef cnp.ndarray out_k_ = new_integers(1, K), out_j_ = new_integers(1, K)
     cdef cnp.ndarray out_hit_ = new_doubles(1, K), out_edge_ = new_integers(1, K)
-    cdef i64* out_k = ip(out_k_)
-    cdef i64* out_j = ip(out_j_)
-    cdef f64* out_hit = fp(out_hit_)
-    cdef i64* out_edge = ip(out_edge_)
+    cdef i64* out_k = idata(out_k_)
+    cdef i64* out_j = idata(out_j_)
+    cdef f64* out_hit = fdata(out_hit_)
+    cdef i64* out_edge = idata(out_edge_)
     i = 0
     for e in range(P):
         if keep[e]:
@@ -217,7 +217,7 @@ cdef cnp.ndarray _object_misses_c(const i64* rows, Py_ssize_t n, Py_ssize_t A, c
                                   const f64* v, const f64* q, const i64* slots,
                                   f64* slot_hidden, Py_ssize_t L):
     cdef cnp.ndarray sums_ = zero_doubles(2, 3, A + 1)
-    cdef f64* r = fp(sums_)
+    cdef f64* r = fdata(sums_)
     cdef f64* miss_mass = r + (A + 1)
     cdef f64* hidden_mass = r + 2 * (A + 1)
     cdef Py_ssize_t k, a
@@ -228,7 +228,7 @@ cdef cnp.ndarray _object_misses_c(const i64* rows, Py_ssize_t n, Py_ssize_t A, c
     for k in range(L):
         slot_hidden[k] = 0.0
     cdef cnp.ndarray miss_obj_ = new_doubles(1, A)
-    cdef f64* miss_obj = fp(miss_obj_)
+    cdef f64* miss_obj = fdata(miss_obj_)
     for a in range(A):
         slot_hidden[slots[a]] = hidden_mass[a] / py_max(miss_mass[a], 1e-300)
         miss_obj[a] = py_max(1.0 - r[a] + miss_mass[a], 1e-300)
@@ -255,7 +255,7 @@ def _object_misses(rows, Py_ssize_t A, mass, miss, det, occ, v, q, slots, slot_h
 cdef cnp.ndarray _new_weights_c(const f64* clutter, Py_ssize_t M, const f64* seen_hidden,
                                 const f64* poisson_hit, double occludability):
     cdef cnp.ndarray w_new_ = new_doubles(1, M)
-    cdef f64* w_new = fp(w_new_)
+    cdef f64* w_new = fdata(w_new_)
     cdef Py_ssize_t j
     for j in range(M):
         w_new[j] = clutter[j] * (1.0 - occludability * seen_hidden[j]) + poisson_hit[j]
@@ -274,16 +274,16 @@ def _new_weights(clutter, seen_hidden, poisson_hit, double occludability):
 cdef tuple _strong_edges_c(const i64* row, const i64* col, const f64* L_edge, Py_ssize_t E,
                            const f64* miss_obj, const f64* w_new, double floor_):
     cdef cnp.ndarray strong_ = new_booleans(1, E)
-    cdef b8* strong = bp(strong_)
+    cdef b8* strong = bdata(strong_)
     cdef Py_ssize_t e, i, count = 0
     for e in range(E):
         strong[e] = floor_ == 0.0 or L_edge[e] >= floor_ * miss_obj[row[e]] * w_new[col[e]]
         count += strong[e]
     cdef cnp.ndarray s_row_ = new_integers(1, count), s_col_ = new_integers(1, count)
     cdef cnp.ndarray s_L_ = new_doubles(1, count)
-    cdef i64* s_row = ip(s_row_)
-    cdef i64* s_col = ip(s_col_)
-    cdef f64* s_L = fp(s_L_)
+    cdef i64* s_row = idata(s_row_)
+    cdef i64* s_col = idata(s_col_)
+    cdef f64* s_L = fdata(s_L_)
     i = 0
     for e in range(E):
         if strong[e]:
@@ -328,6 +328,6 @@ def _association_weights(rows, Py_ssize_t A, mass, miss, det, occ, v, q, slots, 
     cdef cnp.ndarray miss_obj_ = _object_misses_c(ro, dim(rows, 0), A, m, mi, de, oc, vv, qq,
                                                   sl, sh, dim(slot_hidden, 0))
     cdef cnp.ndarray w_new_ = _new_weights_c(cl, dim(clutter, 0), seen, ph, occludability)
-    strong, s_row, s_col, s_L = _strong_edges_c(er, ec, L, dim(L_edge, 0), fp(miss_obj_),
-                                                fp(w_new_), floor)
+    strong, s_row, s_col, s_L = _strong_edges_c(er, ec, L, dim(L_edge, 0), fdata(miss_obj_),
+                                                fdata(w_new_), floor)
     return miss_obj_, w_new_, strong, s_row, s_col, s_L
