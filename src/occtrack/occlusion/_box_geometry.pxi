@@ -6,13 +6,13 @@ cdef inline double _hides_c(const f64* a, const f64* b, double gain, double ramp
     """p(box a hidden by box b), a and b pointing at one box each (4 values)."""
     cdef double cover = 1.0, overlap, gap, order
     cdef int axis
-    for axis in range(2):  # (ZERO, ONE: 0.0 and 1.0, see _occlusion.pyx)
+    for axis in range(2):
         overlap = py_max(py_min(a[axis * 2 + 1], b[axis * 2 + 1])
-                       - py_max(a[axis * 2], b[axis * 2]), ZERO)
+                       - py_max(a[axis * 2], b[axis * 2]), 0.0)
         cover *= overlap / py_max(a[axis * 2 + 1] - a[axis * 2], 1e-9)
     gap = (b[3] - a[3]) / py_max(b[3] - b[2], 1e-9)
     order = (gap - ramp_zero) / (ramp_one - ramp_zero)
-    return py_min(py_max(gain * cover, ZERO), ONE) * py_min(py_max(order, ZERO), ONE)
+    return py_min(py_max(gain * cover, 0.0), 1.0) * py_min(py_max(order, 0.0), 1.0)
 
 
 cdef void _visible_dense_c(const f64* hidden, Py_ssize_t K, const f64* occluders,

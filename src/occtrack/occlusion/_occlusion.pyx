@@ -35,20 +35,6 @@ from occtrack.models._scan_geometry cimport Window, beam_direction, beam_window_
 cnp.import_array()
 
 
-# ---- shared by the kernels ----------------------------------------------------------------
-
-cdef extern from *:
-    """
-    /* 0 and 1 that the C compiler cannot take for constants (read at each use): gcc makes
-       max(x, 0.0) and min(x, 1.0) a branch, which real boxes mispredict (_hidden_dense 40%
-       slower than numba on MOT17-04), but max(x, y) of two values the branchless maxsd that
-       numba's LLVM uses for both */
-    static volatile double occtrack_zero = 0.0, occtrack_one = 1.0;
-    """
-    double ZERO "occtrack_zero"
-    double ONE "occtrack_one"
-
-
 cdef inline f64* _boxes(object a, str name) except NULL:
     """a's data, if a is a C-contiguous float64 array of edge boxes (n, 2, 2)."""
     cdef f64* x = doubles(a, 3, name)
