@@ -476,6 +476,61 @@ def test_label_min_existence_is_inclusive_and_empty_objects_are_recycled():
     assert f.slot_used.sum() == 2 and f.slot_used[0] and f.slot_used[out[2]]
 
 
+def _unplaced_by_hand(f, spread):
+    """The slots `_recycle_unplaced` must free, from its definition: used, undetected at the
+    last update, and sum_k w_k P_k[centre] / r > (spread sum_k w_k half_k / r)^2 on an axis."""
+    n, L = f.n, len(f.slot_used)
+    lost = []
+    for i in range(L):
+        mine = np.flatnonzero(f.label[:n] == i)
+        if not f.slot_used[i] or not f.slot_coast[i] > 0 or len(mine) == 0:
+            continue
+        w = f.mass[mine]
+        r = w.sum()
+        for a in range(2):
+            var = (w * f.cov[mine, a, 0, 0]).sum() / r
+            half = (w * f.mean[mine, a, 2]).sum() / r
+            if var > (spread * half) ** 2 * (1 + 1e-12):
+                lost.append(i)
+                break
+    return lost
+
+
+@pytest.mark.parametrize("spread", [0.5, 1.0, 2.0])
+def test_undetected_objects_that_lost_their_place_are_recycled(spread):
+    """Four objects of half-size (20, 60): slot 0 detected at its last update, slots 1-3
+    undetected, with centre standard deviations (30, 10), (12, 10) and, over two components,
+    (5, 70): slot 3 spreads on the vertical axis. The ones whose spread exceeds spread x
+    half-size on an axis go to the Poisson part: label -1, slot free, mass unchanged; the
+    others keep everything."""
+    f = make(max_labels=4)
+    load(f, [0.9, 0.8, 0.7, 0.3, 0.3], [0, 1, 2, 3, 3])
+    sd = np.array([[30.0, 10.0], [30.0, 10.0], [12.0, 10.0], [5.0, 70.0], [5.0, 70.0]])
+    f.cov[:5, :, 0, 0] = sd ** 2
+    f.slot_coast[:4] = [0.0, 0.5, 0.5, 2.0]
+    expected = _unplaced_by_hand(f, spread)
+    assert expected == {0.5: [1, 2, 3], 1.0: [1, 3], 2.0: []}[spread]
+    mass, label = f.mass[:5].copy(), f.label[:5].copy()
+    f.config = f.config.replace(identity_spread=spread)
+    f._recycle_unplaced()
+    assert f.mass[:5].tolist() == mass.tolist()
+    assert np.flatnonzero(~f.slot_used).tolist() == expected
+    gone = np.isin(label, expected)
+    assert (f.label[:5][gone] == -1).all() and (f.label[:5][~gone] == label[~gone]).all()
+
+
+def test_identity_spread_inf_keeps_every_label_and_a_bad_value_is_refused():
+    f = make(max_labels=4, identity_spread=float("inf"))
+    load(f, [0.9], [0])
+    f.cov[0, :, 0, 0] = 1e8
+    f.slot_coast[0] = 10.0
+    f._recycle_unplaced()
+    assert f.slot_used[0] and f.label[0] == 0
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="identity_spread must be a positive number"):
+            TrackerConfig(identity_spread=bad)
+
+
 def test_a_measurement_without_a_new_bernoulli_gets_no_slot():
     f = make(max_labels=4, label_min_existence=0.0)
     out = f._assign_labels(np.array([0.2]), np.array([-1]), np.array([1]), 3)

@@ -164,7 +164,8 @@ class ScanTrackerConfig:
             birth_occludability=self.birth_occludability, confirm_hits=self.confirm_hits,
             confirm_window=self.confirm_window, report_existence=self.report_existence,
             report_min_confidence=0.0, gate_sigmas=self.gate_sigmas,
-            birth_speed_std=self.birth_speed_std / h, inward_speed=0.0)
+            birth_speed_std=self.birth_speed_std / h, inward_speed=0.0,
+            identity_spread=math.inf)
 
 
 def scan_table(data: dict, source: str = "configuration") -> dict:

@@ -50,7 +50,15 @@ this honest on real detections:
 - `occtrack.tracker` reports an undetected object only while its confidence (existence times
   the probability that its spreading box still overlaps the person) is at least
   `report_min_confidence`; it is kept, unreported, for as long as m holds its existence, so
-  its label survives.
+  its label survives;
+- but only while the filter knows where it is: once the predicted centre's standard deviation
+  exceeds `identity_spread` (1) times its half-size on an axis, the object is recycled into the
+  Poisson part (`_recycle_unplaced`). Behind a wide occluder m stays near 1 and the prediction
+  keeps spreading (its own motion, the camera's); a detection that then comes out from behind
+  the occluder is a new person about as often as the hidden one, and taken by the old label it
+  swaps two identities. On a still camera the spread grows slowly and long occlusions are
+  bridged; on a moving one the camera's uncertainty ends them sooner (README, "Where each
+  occlusion model pays").
 
 Then the children lighter than `prune_mass` are dropped; each Bernoulli keeps at most its
 `max_components_per_object` heaviest, rescaled so that its existence is unchanged (only the
@@ -98,6 +106,7 @@ numpy computes it.
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
@@ -119,6 +128,7 @@ from occtrack.filters.gmpmb.labels import (
     _keep_labels,
     _object_moments,
     _open_slots,
+    _recycle_unplaced,
 )
 from occtrack.filters.gmpmb.pool import (
     _append_births,
@@ -289,6 +299,7 @@ class GaussianMixturePMB:
         if camera is not None:
             self.move_image(*camera)
         self._predict()
+        self._recycle_unplaced()
         self._add_births(z, observed)
         if classes is not None:  # (the kernels read int64)
             classes = np.ascontiguousarray(classes, dtype=np.int64)
@@ -336,6 +347,18 @@ class GaussianMixturePMB:
                       self.detectability.stationary, self._memories[0],
                       self.occludability.stationary, self._memories[1], self.image_size,
                       self.survival_inside, self.config.exit_survival)
+
+    def _recycle_unplaced(self) -> None:
+        """An undetected object keeps its identity only while the filter knows where it is:
+        once its predicted centre's standard deviation exceeds `identity_spread` times its
+        half-size on an axis (the spread of its components, each a hypothesis of where it is,
+        the distance between them left out), a detection near it is no more its than anyone
+        else's; it is recycled into the Poisson part (its mass stays, as undetected
+        intensity, and a detection there starts a new identity)."""
+        n, spread = self.n, self.config.identity_spread
+        if n and math.isfinite(spread):
+            _recycle_unplaced(self.label[:n], self.mass[:n], self.mean[:n], self.cov[:n],
+                              self.slot_used, self.slot_coast, spread)
 
     def _size_prior(self) -> tuple[np.ndarray, np.ndarray]:
         """Half-size (mean, std) of a newborn, px: the configured values, else those of the

@@ -1,7 +1,8 @@
 """The filter's label slots and their Bernoullis, compiled (`_gmpmb`, source `_labels.pxi`):
 existence per label, which Bernoullis keep a label and which get a new slot, n-of-m
-confirmation, the existence guard and the moments of each object. Loops over a few dozen
-slots, too small for numpy's per-call overhead to pay off; `GaussianMixturePMB` calls them."""
+confirmation, the recycling of undetected objects that lost their place, the existence guard
+and the moments of each object. Loops over a few dozen slots, too small for numpy's per-call
+overhead to pay off; `GaussianMixturePMB` calls them."""
 
 from __future__ import annotations
 
@@ -14,5 +15,6 @@ from occtrack.filters.gmpmb._gmpmb import (  # noqa: F401 (the kernels, under th
     _object_moments,
     _open_slots,
     _rank_bernoullis,
+    _recycle_unplaced,
     _split_ranked,
 )
