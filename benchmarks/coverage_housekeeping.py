@@ -27,8 +27,8 @@ SOURCE = "src/occtrack/filters/gmpmb/__init__.py"  # the class (its kernels are 
 CLASS = "GaussianMixturePMB"
 # the housekeeping methods named by issue 15: storage growth, capacity, trimming, labels and
 # recycling, merging, the existence guard, confirmation, the one-time warnings
-METHODS = ("_reserve", "_reserve_slots", "_select", "_assign_labels", "_merge", "_cap_existence",
-           "_confirm_or_delete", "_warn_once")
+METHODS = ("_reserve", "_reserve_slots", "_select", "_assign_labels", "_recycle_unplaced",
+           "_merge", "_cap_existence", "_confirm_or_delete", "_warn_once")
 
 
 def measure(tests: list[str], workdir: Path) -> dict:

@@ -478,19 +478,19 @@ def test_label_min_existence_is_inclusive_and_empty_objects_are_recycled():
 
 def _unplaced_by_hand(f, spread):
     """The slots `_recycle_unplaced` must free, from its definition: used, undetected at the
-    last update, and sum_k w_k P_k[centre] / r > (spread sum_k w_k half_k / r)^2 on an axis."""
+    last update, and a centre variance of the mixture, sum_k w_k (P_k[centre] + (mu_k -
+    mean)^2) / r, above (spread sum_k w_k half_k / r)^2 on an axis."""
     n, L = f.n, len(f.slot_used)
     lost = []
     for i in range(L):
         mine = np.flatnonzero(f.label[:n] == i)
         if not f.slot_used[i] or not f.slot_coast[i] > 0 or len(mine) == 0:
             continue
-        w = f.mass[mine]
-        r = w.sum()
+        w = f.mass[mine] / f.mass[mine].sum()
         for a in range(2):
-            var = (w * f.cov[mine, a, 0, 0]).sum() / r
-            half = (w * f.mean[mine, a, 2]).sum() / r
-            if var > (spread * half) ** 2 * (1 + 1e-12):
+            centre = f.mean[mine, a, 0]
+            var = (w * (f.cov[mine, a, 0, 0] + (centre - (w * centre).sum()) ** 2)).sum()
+            if var > (spread * (w * f.mean[mine, a, 2]).sum()) ** 2 * (1 + 1e-12):
                 lost.append(i)
                 break
     return lost
@@ -499,17 +499,19 @@ def _unplaced_by_hand(f, spread):
 @pytest.mark.parametrize("spread", [0.5, 1.0, 2.0])
 def test_undetected_objects_that_lost_their_place_are_recycled(spread):
     """Four objects of half-size (20, 60): slot 0 detected at its last update, slots 1-3
-    undetected, with centre standard deviations (30, 10), (12, 10) and, over two components,
-    (5, 70): slot 3 spreads on the vertical axis. The ones whose spread exceeds spread x
-    half-size on an axis go to the Poisson part: label -1, slot free, mass unchanged; the
-    others keep everything."""
+    undetected, with centre standard deviations (30, 10) and (12, 10), and slot 3 two
+    hypotheses 30 px apart, each (5, 5): its mixture's spread (15.8 px) is mostly the distance
+    between them. The ones whose spread exceeds spread x half-size on an axis go to the Poisson
+    part: label -1, slot free, mass unchanged; the others keep everything."""
     f = make(max_labels=4)
-    load(f, [0.9, 0.8, 0.7, 0.3, 0.3], [0, 1, 2, 3, 3])
-    sd = np.array([[30.0, 10.0], [30.0, 10.0], [12.0, 10.0], [5.0, 70.0], [5.0, 70.0]])
+    means = np.stack([person(900.0), person(1000.0), person(1100.0), person(1185.0),
+                      person(1215.0)])
+    load(f, [0.9, 0.8, 0.7, 0.3, 0.3], [0, 1, 2, 3, 3], means=means)
+    sd = np.array([[30.0, 10.0], [30.0, 10.0], [12.0, 10.0], [5.0, 5.0], [5.0, 5.0]])
     f.cov[:5, :, 0, 0] = sd ** 2
     f.slot_coast[:4] = [0.0, 0.5, 0.5, 2.0]
     expected = _unplaced_by_hand(f, spread)
-    assert expected == {0.5: [1, 2, 3], 1.0: [1, 3], 2.0: []}[spread]
+    assert expected == {0.5: [1, 2, 3], 1.0: [1], 2.0: []}[spread]
     mass, label = f.mass[:5].copy(), f.label[:5].copy()
     f.config = f.config.replace(identity_spread=spread)
     f._recycle_unplaced()

@@ -133,9 +133,9 @@ class TrackerConfig:
     max_components_per_object: int = 16  # each object keeps its heaviest ones; 0: no limit
     prune_mass: float = 1e-5  # drop components lighter than this
     label_min_existence: float = 1e-3  # Bernoullis weaker than this go to the Poisson part
-    # an undetected object whose centre's standard deviation exceeds this many of its
+    # an undetected object whose predicted centre's standard deviation exceeds this many of its
     # half-sizes (either axis) has lost its place and goes to the Poisson part too (inf: never)
-    identity_spread: float = 1.0
+    identity_spread: float = 1.2
     merge_position: float = 0.017  # merge components of one object in one cell this wide, h
     merge_velocity: float = 0.057  # h / s
     lbp_tolerance: float = 1e-7  # stop loopy BP when messages change less than this

@@ -278,62 +278,9 @@ def _cap_in_place(mass, label, Py_ssize_t L):
             m[k] *= 1.0 / py_max(r[i], 1e-300)
 
 
-def _recycle_unplaced(label, mass, mean, cov, used, coast, double spread):
-    """`GaussianMixturePMB._recycle_unplaced` in place: every used slot whose object went
-    undetected at its last update (coast > 0) and whose centre is no longer placed, its
-    components' mass-weighted centre variance above (spread x their mass-weighted half-size)^2
-    on either axis, is freed and its components' labels set to -1 (the Poisson part).
-    Returns how many slots were freed."""
-    cdef i64* lab = integers(label, 1, "label")
-    cdef const f64* m = doubles(mass, 1, "mass")
-    cdef const f64* mu = doubles(mean, 3, "mean")
-    cdef const f64* P = doubles(cov, 4, "cov")
-    cdef b8* u = booleans(used, 1, "used")
-    cdef const f64* unseen = doubles(coast, 1, "coast")
-    cdef Py_ssize_t n = dim(label, 0), L = dim(used, 0), B = dim(mean, 1), d = dim(mean, 2)
-    cdef Py_ssize_t k, a, freed = 0
-    cdef i64 i
-    length(coast, L, "coast")
-    cdef cnp.ndarray r_ = _label_sums_c(lab, m, n, L)
-    cdef const f64* r = fdata(r_)
-    # per slot and axis: sum of w_k P_k(centre, centre) and of w_k half-size_k
-    cdef cnp.ndarray var_ = zero_doubles(2, L, 2), half_ = zero_doubles(2, L, 2)
-    cdef f64* var = fdata(var_)
-    cdef f64* half = fdata(half_)
-    for k in range(n):
-        i = lab[k]
-        if i >= 0 and unseen[i] > 0.0:
-            for a in range(2):
-                var[i * 2 + a] += m[k] * P[((k * B + a) * d) * d]
-                half[i * 2 + a] += m[k] * mu[(k * B + a) * d + 2]
-    cdef cnp.ndarray lost_ = zero_booleans(1, L)
-    cdef b8* lost = bdata(lost_)
-    cdef double size
-    for i in range(L):
-        if u[i] and unseen[i] > 0.0 and r[i] > 0.0:
-            for a in range(2):
-                # (both sums carry the factor r: var / r > (spread half / r)^2)
-                size = spread * half[i * 2 + a]
-                if var[i * 2 + a] * r[i] > size * size:
-                    lost[i] = True
-            if lost[i]:
-                u[i] = False
-                freed += 1
-    if freed:
-        for k in range(n):
-            if lab[k] >= 0 and lost[lab[k]]:
-                lab[k] = -1
-    return freed
-
-
-def _object_moments(label, mass, mean, cov, Py_ssize_t L):
-    """`GaussianMixturePMB.object_moments` of components with these labels: per slot the
-    existence, the mass-weighted mean state and the centre's standard deviation."""
-    cdef const i64* lab = integers(label, 1, "label")
-    cdef const f64* m = doubles(mass, 1, "mass")
-    cdef const f64* mu = doubles(mean, 3, "mean")
-    cdef const f64* P = doubles(cov, 4, "cov")
-    cdef Py_ssize_t n = dim(label, 0), B = dim(mean, 1), d = dim(mean, 2), k, b, c, a
+cdef tuple _object_moments_c(const i64* lab, const f64* m, const f64* mu, const f64* P,
+                             Py_ssize_t n, Py_ssize_t B, Py_ssize_t d, Py_ssize_t L):
+    cdef Py_ssize_t k, b, c, a
     cdef i64 i
     cdef double share, dev
     cdef cnp.ndarray r_ = _label_sums_c(lab, m, n, L)
@@ -359,3 +306,54 @@ def _object_moments(label, mass, mean, cov, Py_ssize_t L):
     for k in range(2 * L):
         fdata(sd_)[k] = sqrt(var[k])
     return r_, means_, sd_
+
+
+def _object_moments(label, mass, mean, cov, Py_ssize_t L):
+    """`GaussianMixturePMB.object_moments` of components with these labels: per slot the
+    existence, the mass-weighted mean state and the centre's standard deviation."""
+    cdef const i64* lab = integers(label, 1, "label")
+    cdef const f64* m = doubles(mass, 1, "mass")
+    cdef const f64* mu = doubles(mean, 3, "mean")
+    cdef const f64* P = doubles(cov, 4, "cov")
+    return _object_moments_c(lab, m, mu, P, dim(label, 0), dim(mean, 1), dim(mean, 2), L)
+
+
+def _recycle_unplaced(label, mass, mean, cov, used, coast, double spread):
+    """`GaussianMixturePMB._recycle_unplaced` in place: every used slot undetected at its last
+    update (coast > 0) whose centre's standard deviation (`_object_moments`) exceeds spread
+    times its mean half-size on an axis is freed and its components' labels set to -1 (the
+    Poisson part). Returns how many slots were freed."""
+    cdef i64* lab = integers(label, 1, "label")
+    cdef const f64* m = doubles(mass, 1, "mass")
+    cdef const f64* mu = doubles(mean, 3, "mean")
+    cdef const f64* P = doubles(cov, 4, "cov")
+    cdef b8* u = booleans(used, 1, "used")
+    cdef const f64* unseen = doubles(coast, 1, "coast")
+    cdef Py_ssize_t n = dim(label, 0), L = dim(used, 0), B = dim(mean, 1), d = dim(mean, 2)
+    cdef Py_ssize_t k, a, freed = 0
+    cdef i64 i
+    length(coast, L, "coast")
+    for i in range(L):
+        if u[i] and unseen[i] > 0.0:
+            break
+    else:
+        return 0
+    r_, means_, sd_ = _object_moments_c(lab, m, mu, P, n, B, d, L)
+    cdef const f64* r = fdata(r_)
+    cdef const f64* means = fdata(means_)
+    cdef const f64* sd = fdata(sd_)
+    cdef cnp.ndarray lost_ = zero_booleans(1, L)
+    cdef b8* lost = bdata(lost_)
+    for i in range(L):
+        if u[i] and unseen[i] > 0.0 and r[i] > 0.0:
+            for a in range(2):
+                if sd[i * 2 + a] > spread * means[(i * B + a) * d + 2]:
+                    lost[i] = True
+            if lost[i]:
+                u[i] = False
+                freed += 1
+    if freed:
+        for k in range(n):
+            if lab[k] >= 0 and lost[lab[k]]:
+                lab[k] = -1
+    return freed

@@ -1,7 +1,7 @@
 """The filter's label slots and their Bernoullis, compiled (`_gmpmb`, source `_labels.pxi`):
 existence per label, which Bernoullis keep a label and which get a new slot, n-of-m
-confirmation, the recycling of undetected objects that lost their place, the existence guard
-and the moments of each object. Loops over a few dozen slots, too small for numpy's per-call
+confirmation, the existence guard, the moments of each object and the recycling of undetected
+objects whose place is lost. Loops over a few dozen slots, too small for numpy's per-call
 overhead to pay off; `GaussianMixturePMB` calls them."""
 
 from __future__ import annotations
