@@ -58,12 +58,11 @@ this honest on real detections:
   time, and a detection near it is often someone else's (on MOT17, a track that took a
   detection back after more than a second unseen, at that spread or more, was on the same
   person 23 times in 73: 13 in 57 on the moving MOT17-05, 10 in 16 on MOT17-11; below it 113
-  in 180: `benchmarks/retakes.py`). Behind a wide occluder m
-  stays near 1 while the prediction keeps spreading (its own motion, the camera's); taken by
-  the old label, the next person to come out from behind the occluder would swap two
-  identities. On a still camera the spread grows slowly and long occlusions are still bridged;
-  on a moving one the camera's uncertainty ends them sooner (README, "Real detections and the
-  peers").
+  in 180: `benchmarks/retakes.py`). Behind a wide occluder m stays near 1 while the
+  prediction keeps spreading (its own motion, the camera's); taken by the old label, the next
+  person to come out from behind the occluder would swap two identities. On a still camera the
+  spread grows slowly and long occlusions are still bridged; on a moving one the camera's
+  uncertainty ends them sooner (README, "Real detections and the peers").
 
 Then the children lighter than `prune_mass` are dropped; each Bernoulli keeps at most its
 `max_components_per_object` heaviest, rescaled so that its existence is unchanged (only the
