@@ -186,6 +186,29 @@ def test_reproduce_lidar_animates_the_scans_around_the_picked_one_and_never_over
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scans.gif"]  # no temporary left
 
 
+def test_the_picked_window_is_arounds_without_holding_the_stream():
+    """PickWindow, fed a stream with picks at some items, keeps what `around` cuts from the
+    whole stream at the last pick (every stream of up to 9 items, every pick set, windows of 1
+    to 5), makes only the items it may keep, and never holds more than 3 windows' worth."""
+    import itertools
+
+    from occtrack.experiments.scan_tracking import PickWindow, around
+
+    for n in range(1, 10):
+        for length in range(1, 6):
+            for picks in itertools.chain.from_iterable(
+                    itertools.combinations(range(n), k) for k in (1, 2, 3)):
+                window, made = PickWindow(length), []
+                for i in range(n):
+                    window.add(lambda i=i, made=made: made.append(i) or i, i in picks)
+                    assert len(window.kept) + len(window.recent) <= 3 * length
+                kept, index = window.result()
+                assert kept == around(list(range(n)), picks[-1], length)
+                assert kept[index] == picks[-1]
+                if length == 1:
+                    assert made == list(picks)  # a figure makes only the picked scans
+
+
 def test_an_animation_is_a_frame_per_scan_on_fixed_axes_holding_everyone(tmp_path):
     pytest.importorskip("matplotlib")
     from PIL import Image

@@ -189,9 +189,10 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(format_table(result, seeds, args.scans))
     if args.figure or args.animation:
-        from occtrack.experiments.scan_tracking import around, occlusion_scans
+        from occtrack.experiments.scan_tracking import occlusion_scans
 
-        pictures, picked = occlusion_scans(seeds[0], args.scans, quiet=args.quiet)
+        length = args.animation_scans if args.animation else 1
+        pictures, picked = occlusion_scans(seeds[0], args.scans, quiet=args.quiet, length=length)
         said = []
         if args.figure:
             from occtrack.viz.lidar import draw_scan_tracks
@@ -202,10 +203,9 @@ def run(args: argparse.Namespace) -> int:
         if args.animation:
             from occtrack.viz.lidar import animate_scan_tracks
 
-            window = around(pictures, picked, args.animation_scans)
-            animate_scan_tracks(args.animation, window, args.force, quiet=args.quiet)
-            said.append(f"scans {window[0].time:.1f} to {window[-1].time:.1f} s of seed "
-                        f"{seeds[0]} ({len(window)} frames) animated in {args.animation}")
+            animate_scan_tracks(args.animation, pictures, args.force, quiet=args.quiet)
+            said.append(f"scans {pictures[0].time:.1f} to {pictures[-1].time:.1f} s of seed "
+                        f"{seeds[0]} ({len(pictures)} frames) animated in {args.animation}")
         if not args.json:
             print("\n".join(said))
     if not args.json:

@@ -25,12 +25,14 @@ identity kept through full occlusions, scans a second; one row per (seed, occlus
   confidence is the probability of.
 - Identity switches: a person matched (as above, every scan) to another track than the one
   it was last matched to.
-- Scans a second: `update` calls timed with time.perf_counter, the scene simulated beforehand.
+- Scans a second: `update` calls timed with time.perf_counter (each scan is simulated before
+  its call, outside the timing, and let go after it: memory holds the scores, not the scans).
 """
 
 from __future__ import annotations
 
 import time
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,33 +139,35 @@ def _picture(s, scene: LidarSceneConfig, out: dict) -> OcclusionPicture:
 
 
 def occlusion_scans(seed: int = 0, scans: int = 600, models=("measurement-wise", "none"),
-                    scene: LidarSceneConfig | None = None,
-                    quiet: bool = True) -> tuple[list[OcclusionPicture], int]:
-    """Every scan of a run as a picture, a tracker per model on the same scans, and the index
-    of the one picked: after the first `SETTLE` s, the scan where the most fully occluded people
-    are held by a track (its centre within two radii of theirs) under the first model and by none
-    under the second (ties: the earliest). A progress bar over the scans unless `quiet`."""
+                    scene: LidarSceneConfig | None = None, quiet: bool = True,
+                    length: int = 1) -> tuple[list[OcclusionPicture], int]:
+    """The `length` consecutive scans (`around`) centred on the one picked, as pictures, and
+    the picked one's index among them; a tracker per model on the same scans. Picked: after
+    the first `SETTLE` s, the scan where the most fully occluded people are held by a track
+    (its centre within two radii of theirs) under the first model and by none under the second
+    (ties: the earliest). The scans are simulated one at a time and at most 3 `length`
+    pictures are held, so memory does not grow with `scans`. A progress bar unless `quiet`."""
     scene = scene or LidarSceneConfig()
     check_pickable(scans, scene)
-    frames = list(simulate_scene(scene, scans, seed))
     trackers = {m: ScanTracker(tracker_config(scene, m), beams=scene.beams, rate=scene.rate)
                 for m in models}
-    pictures: list[OcclusionPicture] = []
-    best, best_key = -1, (-1, 0)
-    for i, s in enumerate(progress(frames, len(frames), "lidar picture", quiet)):
+    window = PickWindow(length)
+    best_key = (-1, 0)
+    for i, s in enumerate(progress(simulate_scene(scene, scans, seed), scans, "lidar picture",
+                                   quiet)):
         out = {m: tr.update(s.range, s.pose[2] + s.angle, s.time, s.pose[:2])
                for m, tr in trackers.items()}
-        pictures.append(_picture(s, scene, out))
-        if s.time < SETTLE:
-            continue
-        person = s.objects.shapes.disc
-        hidden = s.objects.shapes.centre[person & s.occluded]
-        held = [np.hypot(*(hidden[:, None] - out[m].positions[None]).transpose(2, 0, 1))
-                .min(axis=1, initial=np.inf) < scene.person_radius * 2 for m in models]
-        key = (int((held[0] & ~held[1]).sum()), -i)
-        if key > best_key:
-            best, best_key = i, key
-    return pictures, best
+        key = (-1, 0)
+        if s.time >= SETTLE:
+            person = s.objects.shapes.disc
+            hidden = s.objects.shapes.centre[person & s.occluded]
+            held = [np.hypot(*(hidden[:, None] - out[m].positions[None]).transpose(2, 0, 1))
+                    .min(axis=1, initial=np.inf) < scene.person_radius * 2 for m in models]
+            key = (int((held[0] & ~held[1]).sum()), -i)
+        picked = key > best_key
+        best_key = max(key, best_key)
+        window.add(lambda s=s, out=out: _picture(s, scene, out), picked)
+    return window.result()
 
 
 def occlusion_picture(seed: int = 0, scans: int = 600, models=("measurement-wise", "none"),
@@ -173,11 +177,45 @@ def occlusion_picture(seed: int = 0, scans: int = 600, models=("measurement-wise
     return pictures[best]
 
 
+def _start(index: int, length: int, n: int) -> int:
+    return min(max(index - length // 2, 0), max(n - length, 0))
+
+
 def around(pictures: list, index: int, length: int) -> list:
     """`length` consecutive pictures (fewer if there are not so many) centred on `index`,
     shifted to stay within the run."""
-    start = min(max(index - length // 2, 0), max(len(pictures) - length, 0))
+    start = _start(index, length, len(pictures))
     return pictures[start:start + length]
+
+
+class PickWindow:
+    """What `around(items, picked, length)` gives, kept while a stream goes by: the items before
+    the latest pick (at most `length`), the pick and the items after it (at most `length` - 1),
+    never the whole stream. An item comes as a function that makes it, called only if kept."""
+
+    def __init__(self, length: int) -> None:
+        self.length = length
+        self.recent: deque = deque(maxlen=length)  # the items before the current one
+        self.kept: list = []  # before the pick, the pick, after it
+        self.index = -1  # the pick's place in `kept`; -1: nothing picked yet
+
+    def add(self, make, picked: bool) -> None:
+        if picked:
+            self.kept = [*self.recent, make()]
+            self.index = len(self.kept) - 1
+            self.recent.append(self.kept[-1])
+            return
+        need = self.index >= 0 and len(self.kept) - self.index < self.length
+        item = make() if need or self.length > 1 else None
+        if need:
+            self.kept.append(item)
+        if self.length > 1:
+            self.recent.append(item)
+
+    def result(self) -> tuple[list, int]:
+        """The window (`around`'s) and the pick's index in it."""
+        start = _start(self.index, self.length, len(self.kept))
+        return self.kept[start:start + self.length], self.index - start
 
 
 def count_bridged(spells: Occlusions, assigned: dict, present: set, index: dict, rate: float,
@@ -211,7 +249,6 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
               likelihood: str = "derived") -> ScanRun:
     scene = scene or LidarSceneConfig()
     config = tracker_config(scene, occlusion, likelihood, tracker)
-    frames = list(simulate_scene(scene, scans, seed))
     tr = ScanTracker(config, beams=scene.beams, rate=scene.rate)
     total = np.zeros(4)
     assigned: dict[tuple[int, int], int] = {}  # (scan, truth id) -> track id
@@ -222,7 +259,9 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
     present: set[tuple[int, int]] = set()  # (scan, truth id) of the people in the scene
     points = PointTracks()
     confidence, right = [], []
-    for i, s in enumerate(frames):
+    index: dict[int, int] = {}  # scan number at the scene's rate -> scan index
+    for i, s in enumerate(simulate_scene(scene, scans, seed)):  # one scan in memory at a time
+        index[round(s.time * scene.rate)] = i
         start = time.perf_counter()
         out = tr.update(s.range, s.pose[2] + s.angle, s.time, s.pose[:2])
         elapsed += time.perf_counter() - start
@@ -248,18 +287,17 @@ def run_scene(seed: int, occlusion: str, scans: int = 600,
         occluded.append(s.occluded[person])
         seen.append(s.visible[person] >= SEEN_BEAMS)
     rows_ = [np.concatenate(x) for x in (times, ids, occluded)]
-    index = {round(s.time * scene.rate): i for i, s in enumerate(frames)}
 
     n, entered, kept, long_entered, long_kept = count_bridged(
         full_occlusions(*rows_, scene.period, seen=np.concatenate(seen)), assigned, present,
         index, scene.rate, max_spell)
     strict, _, strict_kept, _, _ = count_bridged(
         full_occlusions(*rows_, scene.period), assigned, present, index, scene.rate, max_spell)
-    mean = total / max(len(frames), 1)
+    mean = total / max(len(index), 1)
     h = points.score(cutoff)
     ece = reliability_table(np.concatenate(confidence), np.concatenate(right)).ece
-    return ScanRun(seed, occlusion, len(frames), *mean, n, entered, kept, long_entered,
-                   long_kept, len(frames) / max(elapsed, 1e-9), likelihood, int(switches),
+    return ScanRun(seed, occlusion, len(index), *mean, n, entered, kept, long_entered,
+                   long_kept, len(index) / max(elapsed, 1e-9), likelihood, int(switches),
                    strict_spells=strict, strict_kept=strict_kept, hota=h.hota, deta=h.deta,
                    assa=h.assa, ece=ece)
 
