@@ -134,6 +134,9 @@ def test_sequential_table_and_rerun_skip(tmp_path):
 
     again = sweep.sweep(spec, out)
     assert again.ran == 0 and again.skipped == 8
+    if sweep.dask_available():  # nothing to run: the cluster is never started (it once
+        engine = sweep.DaskEngine(workers=1)  # was asked for tasks it did not have)
+        assert sweep.sweep(spec, out, engine).skipped == 8 and not engine.started
     # a larger grid runs only its new cells and keeps the old rows
     bigger = sweep.load_spec(write(tmp_path / "hw.toml", HIGHWAY_SPEC.replace(
         "[0.95, 0.99]", "[0.95, 0.99, 0.9]")))

@@ -1004,7 +1004,9 @@ def sweep(spec: Spec, output: str | os.PathLike, engine: DaskEngine | None = Non
             todo = list({cell.key: cell for cell in reversed(cells)
                          if cell.key not in store.done}.values())[::-1]
             skipped += len(cells) - len(todo)
-            if engine is not None and todo and not warmed:
+            if not todo:  # every cell is in the table already: no engine to start
+                return {}
+            if engine is not None and not warmed:
                 if not engine.started:  # else the caller started it and stops it
                     stack.enter_context(engine)
                 engine.warm(spec.kind)
