@@ -158,9 +158,12 @@ def score(scene: StreetScene, result: TrackResult, spells: list[Spell],
             "tracks": result.num_tracks}
 
 
-def track(scene: StreetScene, occlusion: str, quiet: bool = True) -> tuple[TrackResult, float]:
-    """The run under one occlusion model and its steady-state steps per second."""
-    config = TrackerConfig(occlusion=occlusion, image_size=scene.image_size, fps=scene.fps)
+def track(scene: StreetScene, occlusion: str, quiet: bool = True,
+          settings: dict | None = None) -> tuple[TrackResult, float]:
+    """The run under one occlusion model and its steady-state steps per second; `settings`:
+    TrackerConfig fields on top of the defaults (for experiments; the demo has none)."""
+    config = TrackerConfig(**{**(settings or {}), "occlusion": occlusion,
+                              "image_size": scene.image_size, "fps": scene.fps})
     d = scene.detections
     frames = [(d.box[rows], d.score[rows]) for rows in d.frame_slices(scene.frames)]
     warm = Tracker(config)
@@ -202,14 +205,14 @@ def detector_figures(scene: StreetScene) -> dict:
 
 
 def run_demo(street: Street | None = None, seed: int = 0, quiet: bool = True,
-             models: tuple[str, ...] = OCCLUSION_NAMES) -> dict:
+             models: tuple[str, ...] = OCCLUSION_NAMES, settings: dict | None = None) -> dict:
     """The scene (default `Street()`), each model's result and scores, and the detector's
-    figures."""
+    figures; `settings` as in `track`."""
     scene = street_scene(street or Street(), seed)
     spells = full_occlusions(scene)
     results, scores, matches = {}, {}, {}
     for name in models:
-        results[name], speed = track(scene, name, quiet)
+        results[name], speed = track(scene, name, quiet, settings)
         matches[name] = match_frames(scene, results[name])
         scores[name] = {**score(scene, results[name], spells, matches[name]),
                         "steps_per_second": speed}
