@@ -21,7 +21,6 @@ units a user cares about.
 
 from __future__ import annotations
 
-import time
 import warnings
 from dataclasses import dataclass
 
@@ -30,7 +29,6 @@ from scipy.optimize import linear_sum_assignment
 
 from occtrack.metrics.gospa import iou
 from occtrack.metrics.reliability import RIGHT_IOU, reliability_table
-from occtrack.progress import progress
 from occtrack.scenarios.street import Street, StreetScene, street_scene
 from occtrack.tracker import OCCLUSION_NAMES, Tracker, TrackerConfig, TrackResult
 
@@ -164,30 +162,9 @@ def track(scene: StreetScene, occlusion: str, quiet: bool = True,
     TrackerConfig fields on top of the defaults (for experiments; the demo has none)."""
     config = TrackerConfig(**{**(settings or {}), "occlusion": occlusion,
                               "image_size": scene.image_size, "fps": scene.fps})
-    d = scene.detections
-    frames = [(d.box[rows], d.score[rows]) for rows in d.frame_slices(scene.frames)]
-    warm = Tracker(config)
-    for boxes, scores in frames:
-        warm.step(boxes, scores)
-    tracker = Tracker(config)
-    rows: dict[str, list] = {k: [] for k in ("frame", "id", "box", "r", "coast", "occ",
-                                             "conf")}
-    seconds = 0.0
-    for index, (boxes, scores) in enumerate(progress(frames, len(frames), occlusion, quiet)):
-        start = time.perf_counter()
-        tracks = tracker.step(boxes, scores)
-        seconds += time.perf_counter() - start
-        rows["frame"].append(np.full(len(tracks), index + 1))
-        rows["id"].append(tracks.ids)
-        rows["box"].append(tracks.boxes)
-        rows["r"].append(tracks.existence)
-        rows["coast"].append(tracks.coasting)
-        rows["occ"].append(tracks.occluded)
-        rows["conf"].append(tracks.confidence)
-    result = TrackResult(*(np.concatenate(rows[k]) for k in ("frame", "id", "box", "r")),
-                         len(frames), seconds,
-                         *(np.concatenate(rows[k]) for k in ("coast", "occ", "conf")))
-    return result, len(frames) / max(seconds, 1e-9)
+    Tracker(config).run(scene.detections, scene.frames)  # the warm-up
+    result = Tracker(config).run(scene.detections, scene.frames, quiet, occlusion)
+    return result, result.frames / max(result.seconds_tracking, 1e-9)
 
 
 def detector_figures(scene: StreetScene) -> dict:
