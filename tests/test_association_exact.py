@@ -107,23 +107,24 @@ def test_sparse_pairs_with_no_weight_left_still_give_ones():
     np.testing.assert_allclose(marg.p_new, [1, 1, 1 - p, 1], rtol=1e-13)
 
 
-def test_zero_miss_and_new_weights_are_clamped_not_divided_by():
-    """A sure detection (w_miss 0) and a measurement that cannot be clutter (w_new 0): the
-    weights are raised to the smallest normal float, so BP gives finite marginals, and the
-    dense and sparse forms agree."""
+def test_zero_miss_and_new_weights_are_constraints_not_divided_by():
+    """A sure detection (w_miss 0) and a measurement that cannot be clutter (w_new 0), each
+    with two pairs to choose from: BP gives finite marginals, the dense and sparse forms agree
+    with the enumeration of the zeros themselves, and an impossible event has probability at
+    most ZERO_FLOOR (test_association_zeros.py: the forced pairs)."""
     w_hit = np.array([[0.5, 0.5], [0.0, 0.2]])
     w_miss, w_new = np.array([0.0, 0.3]), np.array([0.4, 0.0])
     dense = lbp_marginals(w_hit, w_miss, w_new, tol=1e-13)
     i, j = np.nonzero(w_hit)
     sparse = lbp_sparse(i, j, w_hit[i, j], w_miss, w_new, tol=1e-13)
-    exact = exact_marginals(w_hit, np.maximum(w_miss, np.finfo(float).tiny),
-                            np.maximum(w_new, np.finfo(float).tiny))
+    exact = exact_marginals(w_hit, w_miss, w_new)
+    assert exact.p_miss[0] == 0.0 and exact.p_new[1] == 0.0
     for marg, hit in ((dense, dense.p_hit[i, j]), (sparse, sparse.p_hit)):
         assert np.isfinite(hit).all()
         np.testing.assert_allclose(hit, exact.p_hit[i, j], atol=1e-9)
         np.testing.assert_allclose(marg.p_miss, exact.p_miss, atol=1e-9)
         np.testing.assert_allclose(marg.p_new, exact.p_new, atol=1e-9)
-    assert dense.p_miss[0] < 1e-300 and dense.p_new[1] < 1e-9
+        assert marg.p_miss[0] <= lbp_module.ZERO_FLOOR and marg.p_new[1] <= 1e-9
 
 
 def blocks(rng, count, size):

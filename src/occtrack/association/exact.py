@@ -41,6 +41,8 @@ def exact_marginals(w_hit: np.ndarray, w_miss: np.ndarray, w_new: np.ndarray) ->
         choice[i] = -1
 
     visit(0, frozenset(), 1.0)
+    if not total > 0:
+        raise ValueError("no association has positive weight")
     p_hit /= total
     p_miss /= total
     p_new = 1.0 - p_hit.sum(axis=0)

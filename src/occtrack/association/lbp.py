@@ -21,6 +21,11 @@ cluster is iterated until its own largest change falls below `tol` and then left
 crowd most clusters are a person or two and settle in a few iterations, and the cost of an
 iteration follows the pairs still moving, not n m.
 
+Zero weights are hard constraints: w_miss[i] = 0 says object i is surely detected, w_new[j] = 0
+that measurement j surely comes from an object (no clutter, no births). Where only one pair is
+left to meet such a constraint its message is 1 / 0; `forced_pairs` takes those pairs exactly
+first (and names the object or measurement when nothing can meet one), and BP runs on the rest.
+
 The loops are compiled (`_association.pyx` beside this module): `_one_cluster` (fewer pairs
 than `CLUSTER_MIN_PAIRS`: all of them as one cluster, in one call), `_iterate_clusters` (the
 two message equations above, cluster by cluster, each frozen once its largest relative change
@@ -54,9 +59,31 @@ class Marginals:
 
 def lbp_marginals(w_hit: np.ndarray, w_miss: np.ndarray, w_new: np.ndarray,
                   tol: float = 1e-7, max_iter: int = 1000) -> Marginals:
+    """The marginals of every object and measurement; w_hit (n, m), w_miss (n,), w_new (m,),
+    weights >= 0 (zeros: see `forced_pairs`)."""
     w_hit = np.asarray(w_hit, dtype=float)
     w_miss = np.asarray(w_miss, dtype=float)
     w_new = np.asarray(w_new, dtype=float)
+    if w_hit.ndim != 2 or w_miss.shape != w_hit.shape[:1] or w_new.shape != w_hit.shape[1:]:
+        raise ValueError(f"w_hit must be (n, m), w_miss (n,) and w_new (m,), not "
+                         f"{w_hit.shape}, {w_miss.shape} and {w_new.shape}")
+    _check_weights(w_hit, w_miss, w_new)
+    if (w_miss <= 0).any() or (w_new <= 0).any():
+        rows, cols = np.nonzero(w_hit > 0)
+        forced, objects, measurements = forced_pairs(rows, cols, w_miss, w_new)
+        p_hit = np.zeros(w_hit.shape)
+        p_hit[rows[forced], cols[forced]] = 1.0
+        p_miss, p_new = np.zeros(len(w_miss)), np.zeros(len(w_new))
+        free = np.ix_(objects, measurements)
+        sub = _lbp_dense(*_rescaled_dense(w_hit[free], w_miss[objects], w_new[measurements]),
+                         tol, max_iter)
+        p_hit[free], p_miss[objects], p_new[measurements] = sub.p_hit, sub.p_miss, sub.p_new
+        return Marginals(p_hit, p_miss, p_new, sub.iterations)
+    return _lbp_dense(w_hit, w_miss, w_new, tol, max_iter)
+
+
+def _lbp_dense(w_hit: np.ndarray, w_miss: np.ndarray, w_new: np.ndarray, tol: float,
+               max_iter: int) -> Marginals:
     n, m = w_hit.shape
     if n == 0 or m == 0:
         return Marginals(np.zeros((n, m)), np.ones(n), np.ones(m), 0)
@@ -116,13 +143,23 @@ def clusters_of(rows: np.ndarray, cols: np.ndarray, n: int, m: int) -> tuple[int
 def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np.ndarray,
                w_new: np.ndarray, tol: float = 1e-7, max_iter: int = 1000) -> SparseMarginals:
     """Loopy BP on the pairs (rows[e], cols[e]) with weights w_hit[e] > 0 (each pair once);
-    w_miss (n,) and w_new (m,) as in `lbp_marginals`. Cluster by cluster: a cluster stops when
-    its own messages change less than `tol`."""
+    w_miss (n,) and w_new (m,) as in `lbp_marginals`, zeros included (`forced_pairs`). Cluster
+    by cluster: a cluster stops when its own messages change less than `tol`."""
     rows = np.ascontiguousarray(rows, dtype=np.int64)  # the compiled kernels read them in place
     cols = np.ascontiguousarray(cols, dtype=np.int64)
     w_hit = np.ascontiguousarray(w_hit, dtype=float)
-    w_miss = np.maximum(np.asarray(w_miss, dtype=float), TINY)
-    w_new = np.maximum(np.asarray(w_new, dtype=float), TINY)
+    w_miss = np.asarray(w_miss, dtype=float)
+    w_new = np.asarray(w_new, dtype=float)
+    if (w_miss <= 0).any() or (w_new <= 0).any():
+        _check_weights(w_hit, w_miss, w_new)
+        return _sparse_with_zeros(rows, cols, w_hit, w_miss, w_new, tol, max_iter)
+    return _lbp_sparse(rows, cols, w_hit, w_miss, w_new, tol, max_iter)
+
+
+def _lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np.ndarray,
+                w_new: np.ndarray, tol: float, max_iter: int) -> SparseMarginals:
+    w_miss = np.maximum(w_miss, TINY)
+    w_new = np.maximum(w_new, TINY)
     n, m, E = len(w_miss), len(w_new), len(rows)
     if E == 0:
         return SparseMarginals(np.zeros(0), np.ones(n), np.ones(m), 0, 0)
@@ -138,3 +175,108 @@ def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np
                                             max_iter)
     p_hit, p_miss, p_new = _marginals(rows, cols, ratio, grouped, order, w_new, n)
     return SparseMarginals(p_hit, p_miss, p_new, iterations, count)
+
+
+# -- hard zeros -------------------------------------------------------------------------------
+
+ZERO_FLOOR = 1e-150  # a zero weight left after the forced pairs, relative to its row's largest
+
+
+def _check_weights(w_hit: np.ndarray, w_miss: np.ndarray, w_new: np.ndarray) -> None:
+    for name, w in (("w_hit", w_hit), ("w_miss", w_miss), ("w_new", w_new)):
+        bad = w[~(np.isfinite(w) & (w >= 0))]
+        if len(bad):
+            raise ValueError(f"{name} must hold finite weights >= 0, not {bad[0]}")
+
+
+def forced_pairs(rows: np.ndarray, cols: np.ndarray, w_miss: np.ndarray,
+                 w_new: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Hard zeros, exactly. An object with w_miss = 0 must produce a measurement, and a
+    measurement with w_new = 0 must come from an object. When one pair (rows[e], cols[e]) is
+    all that is left to do it, every association of positive weight holds that pair: it is
+    taken (p_hit = 1), and its object and measurement leave the problem, which may force
+    others. Messages would be infinite there (1 / 0), so BP never sees them.
+
+    Returns (pairs taken (E,) bool, objects left (n,) bool, measurements left (m,) bool);
+    a zero weight still left has at least two pairs to choose from and is floored at
+    `ZERO_FLOOR` of its row's largest weight. Raises ValueError, naming the object or
+    measurement, when no association has positive weight."""
+    n, m = len(w_miss), len(w_new)
+    must_hit, must_come = w_miss <= 0, w_new <= 0
+    objects, measurements = np.ones(n, dtype=bool), np.ones(m, dtype=bool)
+    live = np.ones(len(rows), dtype=bool)
+    taken = np.zeros(len(rows), dtype=bool)
+    while True:
+        out_of = np.bincount(rows[live], minlength=n)
+        into = np.bincount(cols[live], minlength=m)
+        stuck = np.flatnonzero(objects & must_hit & (out_of == 0))
+        if len(stuck):
+            raise ValueError(f"no association has positive weight: object {stuck[0]} has "
+                             f"w_miss = 0 and no measurement left to produce")
+        stuck = np.flatnonzero(measurements & must_come & (into == 0))
+        if len(stuck):
+            raise ValueError(f"no association has positive weight: measurement {stuck[0]} "
+                             f"has w_new = 0 and no object left to produce it")
+        take = live & ((objects & must_hit & (out_of == 1))[rows]
+                       | (measurements & must_come & (into == 1))[cols])
+        if not take.any():
+            return taken, objects, measurements
+        e = np.flatnonzero(take)
+        for ends, what, other in ((rows[e], "object", cols[e]),
+                                  (cols[e], "measurement", rows[e])):
+            ends_sorted = np.sort(ends)
+            twice = ends_sorted[1:][ends_sorted[1:] == ends_sorted[:-1]]
+            if len(twice):
+                which = np.sort(other[ends == twice[0]])
+                raise ValueError(f"no association has positive weight: {what} {twice[0]} "
+                                 f"is all that is left to pair with both "
+                                 f"{'objects' if what == 'measurement' else 'measurements'} "
+                                 f"{which[0]} and {which[1]}")
+        taken[e] = True
+        objects[rows[e]] = False
+        measurements[cols[e]] = False
+        live &= objects[rows] & measurements[cols]
+
+
+def _rescaled_dense(w_hit: np.ndarray, w_miss: np.ndarray,
+                    w_new: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each measurement's column, then each object's row, divided by its largest weight (an
+    association holds one weight of each row and each column, so no marginal moves), and the
+    zeros left floored at ZERO_FLOOR: every weight is then in [ZERO_FLOOR, 1] and no message
+    product overflows."""
+    if w_hit.size == 0:
+        return w_hit, np.maximum(w_miss, ZERO_FLOOR), np.maximum(w_new, ZERO_FLOOR)
+    col = np.maximum(w_new, w_hit.max(axis=0))
+    w_hit, w_new = w_hit / col, w_new / col
+    row = np.maximum(w_miss, w_hit.max(axis=1))
+    w_hit, w_miss = w_hit / row[:, None], w_miss / row
+    return w_hit, np.maximum(w_miss, ZERO_FLOOR), np.maximum(w_new, ZERO_FLOOR)
+
+
+def _sparse_with_zeros(rows, cols, w_hit, w_miss, w_new, tol, max_iter) -> SparseMarginals:
+    """`lbp_sparse` with zero miss or new weights: the forced pairs taken, BP on the rest
+    (rescaled as `_rescaled_dense` does)."""
+    n, m = len(w_miss), len(w_new)
+    pairs = w_hit > 0
+    if not pairs.all():  # a pair of weight 0 is no way to produce a measurement
+        sub = _sparse_with_zeros(rows[pairs], cols[pairs], w_hit[pairs], w_miss, w_new, tol,
+                                 max_iter)
+        p_hit = np.zeros(len(rows))
+        p_hit[pairs] = sub.p_hit
+        return SparseMarginals(p_hit, sub.p_miss, sub.p_new, sub.iterations, sub.clusters)
+    taken, objects, measurements = forced_pairs(rows, cols, w_miss, w_new)
+    p_hit, p_miss, p_new = taken.astype(float), np.zeros(n), np.zeros(m)
+    rest = objects[rows] & measurements[cols]
+    row_of, col_of = np.cumsum(objects) - 1, np.cumsum(measurements) - 1
+    r, c = row_of[rows[rest]], col_of[cols[rest]]
+    h, miss, new = w_hit[rest], w_miss[objects], w_new[measurements]
+    col = new.copy()
+    np.maximum.at(col, c, h)
+    h, new = h / col[c], new / col
+    row = miss.copy()
+    np.maximum.at(row, r, h)
+    h, miss = h / row[r], miss / row
+    sub = _lbp_sparse(np.ascontiguousarray(r), np.ascontiguousarray(c), h,
+                      np.maximum(miss, ZERO_FLOOR), np.maximum(new, ZERO_FLOOR), tol, max_iter)
+    p_hit[rest], p_miss[objects], p_new[measurements] = sub.p_hit, sub.p_miss, sub.p_new
+    return SparseMarginals(p_hit, p_miss, p_new, sub.iterations, sub.clusters)
