@@ -276,7 +276,8 @@ sequences: A, B; 240 frames, 2520 pedestrian boxes, 1210 detections: 940 hits, 1
 detection probability, all pedestrians: 0.373 [0.280, 0.476]
   visible (visibility >= 0.75): 0.452 [0.320, 0.592]
   tracked (detected within the last 0.67 s): 0.626 [0.544, 0.701]
-  memory per frame P(hit|hit) - P(hit|miss), visible: 0.883 [0.823, 0.930]; half-second ratio 0.795 [0.610, 0.924]
+  memory per frame P(hit|hit) - P(hit|miss), visible and tracked: 0.817 [0.755, 0.887]; half-second ratio 0.926 [0.805, 0.976]
+  memory per frame, tracked: 0.817 [0.770, 0.866]; half-second ratio 0.935 [0.861, 0.971]
   by visibility:
     0-0.25      0.000 [0.000, 0.020]      n     310  effective      186
     0.25-0.5    0.074 [0.009, 0.407]      n     215  effective        8
@@ -369,7 +370,7 @@ def test_report_of_a_fixed_scene_is_exact(two_sequences):
     assert (cal.frames, cal.targets, cal.hits + cal.false + cal.set_aside) == (240, 2520,
                                                                               cal.detections)
     for values, (size, finite, fingerprint) in zip(
-            _numbers(cal), ((202, 183, 22112.86011225939), (110, 93, 211008.27180301852)),
+            _numbers(cal), ((208, 189, 23008.703344651658), (114, 95, 223992.67767104018)),
             strict=True):
         ok = np.isfinite(values)
         assert (len(values), int(ok.sum())) == (size, finite)
@@ -402,8 +403,8 @@ TOML_HEAD = """\
 # P_D of tracked pedestrians (detected within the last 0.67 s), for occlusion = none; estimate 0.6258, 95 % interval [0.5437, 0.7012]
 detectability = 0.6258
 
-# half-second ratio of the detectability chain; estimate 0.7954, 95 % interval [0.6099, 0.9236]
-detectability_ratio = 0.7954
+# half-second ratio of the detectability chain, tracked people; estimate 0.9354, 95 % interval [0.861, 0.9708]
+detectability_ratio = 0.9354
 
 # kappa W H w h at score 1: false boxes per frame per unit of log w x log h, over the hits' score density; estimate 0.1935, 95 % interval [0.01877, 0.2886]
 clutter_rate = 0.1935
@@ -473,6 +474,7 @@ def _calibration(**changes) -> Calibration:
                 set_aside=0, detection_overall=_estimate(0.6), detectability=_estimate(0.8),
                 detection_tracked=_estimate(0.7), horizon=0.5,
                 detection_memory=_estimate(0.2), detectability_ratio=_estimate(0.3),
+                memory_tracked=_estimate(0.9), ratio_tracked=_estimate(0.6),
                 by_visibility=[], by_height=[], joint=[], false_per_frame=_estimate(0.1),
                 by_score=[], size_area=1.0, clutter_rate=_estimate(0.05),
                 clutter_score_power=_estimate(2.0),
@@ -487,18 +489,19 @@ def _calibration(**changes) -> Calibration:
 def test_settings_clip_and_leave_out_what_was_not_measured():
     cal = _calibration()
     assert cal.settings() == cal.settings(occlusion=True) == {
-        "detectability": 0.8, "detectability_ratio": 0.3, "clutter_rate": 0.05,
+        "detectability": 0.8, "detectability_ratio": 0.6, "clutter_rate": 0.05,
         "clutter_score_power": 2.0, "edge_noise": 0.04}
     assert cal.settings(occlusion=False)["detectability"] == 0.7
+    assert cal.settings(occlusion=False)["detectability_ratio"] == 0.6
     nan = Estimate(float("nan"), float("nan"), float("nan"))
-    cal = _calibration(detectability=_estimate(1.0), detectability_ratio=_estimate(1.5),
+    cal = _calibration(detectability=_estimate(1.0), ratio_tracked=_estimate(1.5),
                        clutter_score_power=_estimate(-0.4), edge_noise=_estimate(0.0))
     assert cal.settings() == {"detectability": 0.999, "detectability_ratio": 1.0,
                               "clutter_rate": 0.05, "clutter_score_power": 0.0}
-    cal = _calibration(detectability=_estimate(0.0), detectability_ratio=_estimate(-0.2),
+    cal = _calibration(detectability=_estimate(0.0), ratio_tracked=_estimate(-0.2),
                        clutter_rate=_estimate(0.0), edge_noise=nan)
     assert cal.settings() == {"detectability": 0.01, "detectability_ratio": 0.0}
-    cal = _calibration(detectability=nan, detectability_ratio=nan, clutter_rate=nan,
+    cal = _calibration(detectability=nan, ratio_tracked=nan, clutter_rate=nan,
                        clutter_score_power=_estimate(0.3))
     assert cal.settings() == {"edge_noise": 0.04}
     assert _calibration(clutter_score_power=_estimate(0.3)).settings()[
@@ -507,7 +510,7 @@ def test_settings_clip_and_leave_out_what_was_not_measured():
 
 def test_toml_says_what_it_clipped_and_left_out():
     nan = Estimate(float("nan"), float("nan"), float("nan"))
-    cal = _calibration(detectability=_estimate(1.0, 0.98, 1.0), detectability_ratio=nan,
+    cal = _calibration(detectability=_estimate(1.0, 0.98, 1.0), ratio_tracked=nan,
                        clutter_rate=_estimate(0.0), edge_noise=_estimate(0.04, 0.0, 0.0625))
     text = to_toml(cal)
     assert ("# P_D of visible people (visibility >= 0.75), for occlusion models; estimate 1, "
@@ -564,8 +567,8 @@ def test_one_person_always_detected_gives_no_interval_and_sets_only_the_detectab
     assert all(cal.edge_robust[name] == 0.0 for name in EDGES)
     assert cal.settings() == {"detectability": 0.999}
     lines = report_lines(cal)
-    assert lines[5] == ("  memory per frame P(hit|hit) - P(hit|miss), visible: -; half-second "
-                        "ratio -")
+    assert lines[5] == ("  memory per frame P(hit|hit) - P(hit|miss), visible and tracked: -; "
+                        "half-second ratio -")
     assert lines[-1] == "  pooled about each edge's bias: edge_noise 0.0000 [0.0000, inf]"
 
 
@@ -618,15 +621,30 @@ def test_edges_with_fewer_than_two_rows_have_no_estimate():
 
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
-def test_memory_with_one_person_always_detected_and_one_never():
-    """After a hit always a hit, after a miss always a miss: lambda 1, half-second ratio 0.
-    The bootstrap draws that take one person twice have no pairs after a hit (or after a
-    miss): their 0 / 0 is dropped quietly, not warned about."""
+def test_memory_leaves_out_a_person_never_detected():
+    """One person always detected, one never: the tracker never holds the second, so none of
+    its pairs count (n 39, person 1's), and with no pair after a miss there is no memory to
+    give. The bootstrap draws that take one person twice have no pairs after a miss: their
+    0 / 0 is dropped quietly, not warned about."""
     frames = 40
     cal = _two_people(frames, [100.0, 100.0, 80.0, 200.0], [900.0, 400.0, 80.0, 200.0],
                       np.ones(frames, bool), np.zeros(frames, bool))
-    assert (cal.detection_memory.value, cal.detection_memory.n) == (1.0, 78)
-    assert cal.detectability_ratio.value == 0.0
+    assert cal.detection_memory.n == 39 and math.isnan(cal.detection_memory.value)
+    assert "detectability_ratio" not in cal.settings()
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_memory_counts_a_run_of_misses_only_within_the_horizon():
+    """Person 1 is always detected; person 2 in frames 1-5 only. The horizon (0.67 s at 30
+    fps: 20 frames) keeps person 2's pairs up to frame 25: after a hit 39 + 5 pairs with
+    39 + 4 hits, after a miss 19 pairs (frames 7-25) with none. lambda = 43/44 - 0."""
+    frames = 40
+    f = np.arange(1, frames + 1)
+    cal = _two_people(frames, [100.0, 100.0, 80.0, 200.0], [900.0, 400.0, 80.0, 200.0],
+                      np.ones(frames, bool), f <= 5)
+    assert cal.detection_memory.n == 39 + 24
+    assert cal.detection_memory.value == pytest.approx(43 / 44, rel=1e-12)
+    assert cal.detectability_ratio.value == pytest.approx(1 - (43 / 44) ** 15, rel=1e-12)
 
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
@@ -645,6 +663,29 @@ def test_memory_of_detection_by_hand_with_two_people():
     assert ratio.value == 1.0 and ratio.high == 1.0 and ratio.n == 78
     assert 0.0 < ratio.low < 1.0
     assert cal.settings()["detectability_ratio"] == 1.0
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_the_memory_without_occlusion_counts_the_misses_behind_others():
+    """Person 1 is always detected; person 2 is detected in frames 1-10, hidden (visibility
+    0.3) and missed in 11-20, detected again in 21-40, all within the horizon. The visible
+    people's memory (for the occlusion models) has no pair after a miss; the tracked people's
+    (the tracker's chain) has after a hit 39 + 9 + 1 + 19 pairs with one miss, after a miss 10
+    pairs with one hit: lambda = 67/68 - 1/10, and every model's file takes that ratio."""
+    frames = 40
+    f = np.arange(1, frames + 1)
+    keep = np.stack([np.ones(frames, bool), (f <= 10) | (f > 20)], axis=1)
+    gt, det = _static_people(2, frames, keep)
+    hidden = (gt.id == gt.id.max()) & (gt.frame > 10) & (gt.frame <= 20)
+    gt = MotTable(gt.frame, gt.id, gt.box, gt.score, gt.cls, np.where(hidden, 0.3, 1.0))
+    cal = calibrate([Labelled("HIDDEN", gt, det, SIZE, 30.0, frames)])
+    assert math.isnan(cal.detection_memory.value) and cal.detection_memory.n == 39 + 28
+    assert cal.memory_tracked.n == 78
+    assert cal.memory_tracked.value == pytest.approx(67 / 68 - 1 / 10, rel=1e-12)
+    ratio = 1 - (67 / 68 - 1 / 10) ** 15
+    assert cal.ratio_tracked.value == pytest.approx(ratio, rel=1e-12)
+    for occlusion in (False, True):
+        assert cal.settings(occlusion)["detectability_ratio"] == pytest.approx(ratio)
 
 
 def test_interval_helpers_on_hand_worked_input():

@@ -27,7 +27,10 @@ clutter_rate, clutter_score_power, edge_noise) that `occtrack track --config` an
 --occlusion none the detectability is that of tracked pedestrians, P(detected | detected
 within the last 0.67 s, a tracker's coasting horizon): no occlusion model explains the
 misses behind others, and the people the tracker does not hold are misses it never weighs;
-else that of visible ones (visibility >= 0.75). The report is printed too (--quiet: not).
+else that of visible ones (visibility >= 0.75). The detectability chain's memory
+(detectability_ratio) is that of tracked people for every model: the chain carries the runs
+of misses a model does not explain (behind others for none; behind what the box geometry
+does not see for an occlusion model). The report is printed too (--quiet: not).
 
 The image size and frame rate come from seqinfo.ini when GT sits at SEQ/gt/gt.txt, else from
 --image-size and --fps. Ground truth with class and visibility columns (MOT17's 9 columns)
