@@ -53,16 +53,22 @@ def test_a_surely_detected_object_with_two_choices_splits_between_them():
         np.testing.assert_allclose(marg.p_miss, [0.0], atol=1e-140)
 
 
+def forest_with_zeros(rng, low: int, high: int, share: float):
+    """A tree-shaped problem of low to high - 1 objects and measurements whose miss and new
+    weights are each 0 with probability `share`."""
+    n, m = int(rng.integers(low, high)), int(rng.integers(low, high))
+    w_hit, w_miss, w_new = random_problem(rng, n, m, random_forest(rng, n, m))
+    w_miss[rng.random(n) < share] = 0.0
+    w_new[rng.random(m) < share] = 0.0
+    return w_hit, w_miss, w_new
+
+
 @pytest.mark.parametrize("seed", range(60))
 def test_zeros_on_trees_are_exact(seed):
     """Tree-shaped problems (where BP is exact) with random miss and new weights set to 0:
     the dense and the sparse form agree with enumeration to 1e-9 where some association has
     positive weight, and all three raise where none has."""
-    rng = np.random.default_rng(1000 + seed)
-    n, m = int(rng.integers(1, 6)), int(rng.integers(1, 6))
-    w_hit, w_miss, w_new = random_problem(rng, n, m, random_forest(rng, n, m))
-    w_miss[rng.random(n) < 0.4] = 0.0
-    w_new[rng.random(m) < 0.4] = 0.0
+    w_hit, w_miss, w_new = forest_with_zeros(np.random.default_rng(1000 + seed), 1, 6, 0.4)
     try:
         exact = exact_marginals(w_hit, w_miss, w_new)
     except ValueError:
@@ -84,10 +90,8 @@ def test_zeros_in_many_clusters_are_exact():
     blocks, n0, m0 = [], 0, 0
     rows, cols, hits, misses, news = [], [], [], [], []
     while len(blocks) < 120:
-        n, m = int(rng.integers(2, 5)), int(rng.integers(2, 5))
-        w_hit, w_miss, w_new = random_problem(rng, n, m, random_forest(rng, n, m))
-        w_miss[rng.random(n) < 0.3] = 0.0
-        w_new[rng.random(m) < 0.3] = 0.0
+        w_hit, w_miss, w_new = forest_with_zeros(rng, 2, 5, 0.3)
+        n, m = len(w_miss), len(w_new)
         try:
             exact = exact_marginals(w_hit, w_miss, w_new)
         except ValueError:
