@@ -473,7 +473,7 @@ def _calibration(**changes) -> Calibration:
     base = dict(sequences=["S"], frames=10, targets=5, detections=4, hits=3, false=1,
                 set_aside=0, detection_overall=_estimate(0.6), detectability=_estimate(0.8),
                 detection_tracked=_estimate(0.7), horizon=0.5,
-                detection_memory=_estimate(0.2), detectability_ratio=_estimate(0.3),
+                memory_visible=_estimate(0.2), ratio_visible=_estimate(0.3),
                 memory_tracked=_estimate(0.9), ratio_tracked=_estimate(0.6),
                 by_visibility=[], by_height=[], joint=[], false_per_frame=_estimate(0.1),
                 by_score=[], size_area=1.0, clutter_rate=_estimate(0.05),
@@ -555,9 +555,9 @@ def test_one_person_always_detected_gives_no_interval_and_sets_only_the_detectab
     for e, n in ((cal.detection_overall, 30), (cal.detectability, 30),
                  (cal.detection_tracked, 29)):
         assert (e.value, e.low, e.high, e.n) == (1.0, 0.0, 1.0, n)
-    assert math.isnan(cal.detection_memory.value) and cal.detection_memory.n == 29
-    assert math.isnan(cal.detectability_ratio.value)
-    for e in (cal.detection_memory, cal.detectability_ratio):
+    assert math.isnan(cal.memory_visible.value) and cal.memory_visible.n == 29
+    assert math.isnan(cal.ratio_visible.value)
+    for e in (cal.memory_visible, cal.ratio_visible):
         assert math.isnan(e.low) and math.isnan(e.high)
     assert (cal.false_per_frame.value, cal.false_per_frame.low) == (0.0, 0.0)
     assert cal.false_per_frame.high == math.inf
@@ -629,7 +629,7 @@ def test_memory_leaves_out_a_person_never_detected():
     frames = 40
     cal = _two_people(frames, [100.0, 100.0, 80.0, 200.0], [900.0, 400.0, 80.0, 200.0],
                       np.ones(frames, bool), np.zeros(frames, bool))
-    assert cal.detection_memory.n == 39 and math.isnan(cal.detection_memory.value)
+    assert cal.memory_visible.n == 39 and math.isnan(cal.memory_visible.value)
     assert "detectability_ratio" not in cal.settings()
 
 
@@ -642,9 +642,9 @@ def test_memory_counts_a_run_of_misses_only_within_the_horizon():
     f = np.arange(1, frames + 1)
     cal = _two_people(frames, [100.0, 100.0, 80.0, 200.0], [900.0, 400.0, 80.0, 200.0],
                       np.ones(frames, bool), f <= 5)
-    assert cal.detection_memory.n == 39 + 24
-    assert cal.detection_memory.value == pytest.approx(43 / 44, rel=1e-12)
-    assert cal.detectability_ratio.value == pytest.approx(1 - (43 / 44) ** 15, rel=1e-12)
+    assert cal.memory_visible.n == 39 + 24
+    assert cal.memory_visible.value == pytest.approx(43 / 44, rel=1e-12)
+    assert cal.ratio_visible.value == pytest.approx(1 - (43 / 44) ** 15, rel=1e-12)
 
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
@@ -657,7 +657,7 @@ def test_memory_of_detection_by_hand_with_two_people():
     f = np.arange(1, frames + 1)
     cal = _two_people(frames, [100.0, 100.0, 80.0, 200.0], [900.0, 400.0, 80.0, 200.0],
                       f % 2 == 1, (f - 1) // 10 % 2 == 0)
-    memory, ratio = cal.detection_memory, cal.detectability_ratio
+    memory, ratio = cal.memory_visible, cal.ratio_visible
     assert memory.value == pytest.approx(-29 / 380, rel=1e-12) and memory.n == 78
     assert (memory.low, memory.high) == (-1.0, 1.0)
     assert ratio.value == 1.0 and ratio.high == 1.0 and ratio.n == 78
@@ -666,10 +666,10 @@ def test_memory_of_detection_by_hand_with_two_people():
 
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
-def test_the_memory_without_occlusion_counts_the_misses_behind_others():
+def test_the_chains_memory_counts_the_misses_behind_others():
     """Person 1 is always detected; person 2 is detected in frames 1-10, hidden (visibility
     0.3) and missed in 11-20, detected again in 21-40, all within the horizon. The visible
-    people's memory (for the occlusion models) has no pair after a miss; the tracked people's
+    people's memory (the detector's own) has no pair after a miss; the tracked people's
     (the tracker's chain) has after a hit 39 + 9 + 1 + 19 pairs with one miss, after a miss 10
     pairs with one hit: lambda = 67/68 - 1/10, and every model's file takes that ratio."""
     frames = 40
@@ -679,7 +679,7 @@ def test_the_memory_without_occlusion_counts_the_misses_behind_others():
     hidden = (gt.id == gt.id.max()) & (gt.frame > 10) & (gt.frame <= 20)
     gt = MotTable(gt.frame, gt.id, gt.box, gt.score, gt.cls, np.where(hidden, 0.3, 1.0))
     cal = calibrate([Labelled("HIDDEN", gt, det, SIZE, 30.0, frames)])
-    assert math.isnan(cal.detection_memory.value) and cal.detection_memory.n == 39 + 28
+    assert math.isnan(cal.memory_visible.value) and cal.memory_visible.n == 39 + 28
     assert cal.memory_tracked.n == 78
     assert cal.memory_tracked.value == pytest.approx(67 / 68 - 1 / 10, rel=1e-12)
     ratio = 1 - (67 / 68 - 1 / 10) ** 15
@@ -838,7 +838,7 @@ def test_thresholds_at_equality_and_missing_visibility():
     assert cal.notes == []
     assert [e.n for _, _, e in cal.by_visibility] == [40, 0, 40, 80]
     assert cal.detectability.n == 80 and cal.detectability.value == 0.5
-    assert cal.detection_memory.n == 2 * (frames - 1)
+    assert cal.memory_visible.n == 2 * (frames - 1)
     assert cal.edge_std["left"].n == 60  # people 1, 2 and 4, detected in 20 frames each
     # a box edge exactly BORDER px from the border
     at_border = MotTable(gt.frame, gt.id, np.c_[np.full(len(gt.frame), 2.0), gt.box[:, 1:]],

@@ -38,7 +38,7 @@ def test_calibrate_gives_back_the_detectors_memory():
     scene = street_scene(Street(), seed=0)
     cal = calibrate([Labelled("street", scene.truth, scene.detections, scene.image_size,
                               scene.fps, scene.frames)], seed=0)
-    memory = cal.detection_memory
+    memory = cal.memory_visible
     assert memory.low <= StreetDetector().memory <= memory.high, memory
 
 

@@ -179,7 +179,8 @@ def _lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: n
 
 # -- hard zeros -------------------------------------------------------------------------------
 
-ZERO_FLOOR = 1e-150  # a zero weight left after the forced pairs, relative to its row's largest
+ZERO_FLOOR = 1e-150  # a zero weight left after the forced pairs, relative to the largest of its
+# object's row (w_miss) or its measurement's column (w_new)
 
 
 def _check_weights(w_hit: np.ndarray, w_miss: np.ndarray, w_new: np.ndarray) -> None:
@@ -199,7 +200,7 @@ def forced_pairs(rows: np.ndarray, cols: np.ndarray, w_miss: np.ndarray,
 
     Returns (pairs taken (E,) bool, objects left (n,) bool, measurements left (m,) bool);
     a zero weight still left has at least two pairs to choose from and is floored at
-    `ZERO_FLOOR` of its row's largest weight. Raises ValueError, naming the object or
+    `ZERO_FLOOR` of its row's (column's) largest weight. Raises ValueError, naming the object or
     measurement, when no association has positive weight."""
     n, m = len(w_miss), len(w_new)
     must_hit, must_come = w_miss <= 0, w_new <= 0

@@ -126,9 +126,11 @@ class Calibration:
     detectability: Estimate
     detection_tracked: Estimate  # P(hit | detected within the last `horizon` s)
     horizon: float
-    detection_memory: Estimate  # visible people, tracked: for the occlusion models
-    detectability_ratio: Estimate
-    memory_tracked: Estimate  # tracked people, any visibility: for occlusion = none
+    # memory of detection per frame and the chain's half-second ratio: of tracked people in
+    # view (the detector's own, for a simulated detector), of tracked people (the setting)
+    memory_visible: Estimate
+    ratio_visible: Estimate
+    memory_tracked: Estimate
     ratio_tracked: Estimate
     by_visibility: list[tuple[float, float, Estimate]]
     by_height: list[tuple[float, float, Estimate]]
@@ -155,9 +157,9 @@ class Calibration:
         (P_D 0.55 on MOT17-04) makes each miss nearly free, so tracks of people who left or
         went out of sight coast on as false boxes. The detectability chain's memory is that of
         tracked people for every model (`ratio_tracked`): the chain carries the runs of misses
-        a model does not explain, behind others for `none`, and for an occlusion model behind
-        what its box geometry does not see, which run as long (the memory of people in view,
-        `detectability_ratio`, is the detector's, for a simulated one)."""
+        a model does not explain: behind others for `none`, and for an occlusion model behind
+        what its box geometry does not see, which come in runs too (the memory of people in
+        view, `ratio_visible`, is the detector's own, for a simulated detector)."""
         detect = self.detectability if occlusion else self.detection_tracked
         ratio = self.ratio_tracked
         out = {}
@@ -462,8 +464,8 @@ def calibrate(sequences: list[Labelled], seed: int = 0,
         sequences=[s.name for s in sequences], frames=frames, targets=targets,
         detections=detections, hits=hits, false=false, set_aside=aside,
         detection_overall=overall, detectability=visible, detection_tracked=tracked,
-        horizon=float(horizon), detection_memory=memory,
-        detectability_ratio=ratio, memory_tracked=memory_tracked, ratio_tracked=ratio_tracked,
+        horizon=float(horizon), memory_visible=memory,
+        ratio_visible=ratio, memory_tracked=memory_tracked, ratio_tracked=ratio_tracked,
         by_visibility=by_vis, by_height=by_h, joint=joint,
         false_per_frame=rates[nb], by_score=by_score, size_area=size_area,
         clutter_rate=clutter_rate, clutter_score_power=power, notes=notes, **edge)
@@ -667,8 +669,8 @@ def report_lines(cal: Calibration) -> list[str]:
              f"  tracked (detected within the last {cal.horizon:g} s): "
              f"{cal.detection_tracked.text()}",
              f"  memory per frame P(hit|hit) - P(hit|miss), visible and tracked: "
-             f"{cal.detection_memory.text()}; half-second ratio "
-             f"{cal.detectability_ratio.text()}",
+             f"{cal.memory_visible.text()}; half-second ratio "
+             f"{cal.ratio_visible.text()}",
              f"  memory per frame, tracked: {cal.memory_tracked.text()}; half-second ratio "
              f"{cal.ratio_tracked.text()}",
              "  by visibility:"]
