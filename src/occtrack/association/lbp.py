@@ -68,17 +68,12 @@ def lbp_marginals(w_hit: np.ndarray, w_miss: np.ndarray, w_new: np.ndarray,
         raise ValueError(f"w_hit must be (n, m), w_miss (n,) and w_new (m,), not "
                          f"{w_hit.shape}, {w_miss.shape} and {w_new.shape}")
     _check_weights(w_hit, w_miss, w_new)
-    if (w_miss <= 0).any() or (w_new <= 0).any():
+    if (w_miss <= 0).any() or (w_new <= 0).any():  # the sparse form's, on the pairs
         rows, cols = np.nonzero(w_hit > 0)
-        forced, objects, measurements = forced_pairs(rows, cols, w_miss, w_new)
+        sub = _sparse_with_zeros(rows, cols, w_hit[rows, cols], w_miss, w_new, tol, max_iter)
         p_hit = np.zeros(w_hit.shape)
-        p_hit[rows[forced], cols[forced]] = 1.0
-        p_miss, p_new = np.zeros(len(w_miss)), np.zeros(len(w_new))
-        free = np.ix_(objects, measurements)
-        sub = _lbp_dense(*_rescaled_dense(w_hit[free], w_miss[objects], w_new[measurements]),
-                         tol, max_iter)
-        p_hit[free], p_miss[objects], p_new[measurements] = sub.p_hit, sub.p_miss, sub.p_new
-        return Marginals(p_hit, p_miss, p_new, sub.iterations)
+        p_hit[rows, cols] = sub.p_hit
+        return Marginals(p_hit, sub.p_miss, sub.p_new, sub.iterations)
     return _lbp_dense(w_hit, w_miss, w_new, tol, max_iter)
 
 
@@ -239,24 +234,12 @@ def forced_pairs(rows: np.ndarray, cols: np.ndarray, w_miss: np.ndarray,
         live &= objects[rows] & measurements[cols]
 
 
-def _rescaled_dense(w_hit: np.ndarray, w_miss: np.ndarray,
-                    w_new: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each measurement's column, then each object's row, divided by its largest weight (an
-    association holds one weight of each row and each column, so no marginal moves), and the
-    zeros left floored at ZERO_FLOOR: every weight is then in [ZERO_FLOOR, 1] and no message
-    product overflows."""
-    if w_hit.size == 0:
-        return w_hit, np.maximum(w_miss, ZERO_FLOOR), np.maximum(w_new, ZERO_FLOOR)
-    col = np.maximum(w_new, w_hit.max(axis=0))
-    w_hit, w_new = w_hit / col, w_new / col
-    row = np.maximum(w_miss, w_hit.max(axis=1))
-    w_hit, w_miss = w_hit / row[:, None], w_miss / row
-    return w_hit, np.maximum(w_miss, ZERO_FLOOR), np.maximum(w_new, ZERO_FLOOR)
-
-
 def _sparse_with_zeros(rows, cols, w_hit, w_miss, w_new, tol, max_iter) -> SparseMarginals:
-    """`lbp_sparse` with zero miss or new weights: the forced pairs taken, BP on the rest
-    (rescaled as `_rescaled_dense` does)."""
+    """`lbp_sparse` (and `lbp_marginals`) with zero miss or new weights: the forced pairs
+    taken, BP on the rest after each measurement's column, then each object's row, is divided
+    by its largest weight (an association holds one weight of each row and each column, so no
+    marginal moves) and the zeros left are floored at ZERO_FLOOR: every weight is then in
+    [ZERO_FLOOR, 1] and no message product overflows."""
     n, m = len(w_miss), len(w_new)
     pairs = w_hit > 0
     if not pairs.all():  # a pair of weight 0 is no way to produce a measurement
