@@ -13,7 +13,7 @@ from occtrack.metrics import protocol_text as protocols
 from occtrack.metrics.protocol_text import KEYS
 
 NAME = "eval"
-HELP = "score a result file against ground truth (CLEAR MOT, IDF1, HOTA, GOSPA)"
+HELP = "score a result file against ground truth (CLEAR MOT, IDF1, HOTA, GOSPA; MOT17 or KITTI)"
 DESCRIPTION = f"""\
 Score a tracker's MOTChallenge result file against a ground-truth file and print MOTA, MOTP,
 IDF1, HOTA, mostly tracked / lost, FP, FN, ID switches, GOSPA and the cardinality error.
@@ -33,6 +33,22 @@ Protocols:
 {protocols.DESCRIPTION["mot17"]}
 
 {protocols.GOSPA_DESCRIPTION}
+
+kitti: KITTI tracking's official evaluation, run by TrackEval (Kitti2DBox: its
+  preprocessing, CLEAR, Identity, HOTA), on KITTI files (label_02/NNNN.txt and a result in
+  KITTI's format, 0-based frames, the score as the 18th column). Classes car and pedestrian
+  are scored apart (--classes car or pedestrian picks one): result boxes matched at IoU >= 0.5
+  to a van (for car) or a sitting person (for pedestrian), or to a true box that is truncated
+  or largely hidden, are removed, and so are unmatched boxes 25 px tall or less or more than
+  half inside a DontCare region. GT_FILE and RESULT_FILE may be two folders: the ground truth
+  a KITTI folder (DIR/label_02/, or label_02/ itself; the sequences its
+  evaluate_tracking.seqmap names, else every NNNN.txt), the result a folder of NNNN.txt.
+  Printed per class: HOTA, DetA, AssA, LocA, MOTA, IDF1, IDSW, FP, FN, MT, ML, MOTP per
+  sequence and TrackEval's COMBINED_SEQ over them. A sequence's length is --frames, else
+  DIR/seqinfo/NNNN.ini or DIR/evaluate_tracking.seqmap, else its last frame + 1. --json prints
+  {{"protocol": "kitti", "classes": {{CLASS: {{"sequences": {{NAME: SCORES}}, "combined":
+  SCORES[, "calibration": TABLE]}}}}, "notes": [...]}}. The protocol is picked by itself when
+  GT_FILE is a KITTI file or folder.
 
 --json prints one object with the keys
   {", ".join(KEYS[:6])},
@@ -61,7 +77,9 @@ examples:
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --calibration
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --protocol paper --json
-  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --out-dir scores/"""
+  occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --out-dir scores/
+  occtrack eval kitti/label_02/0000.txt result.txt --protocol kitti --calibration
+  occtrack eval kitti/ results/ --protocol kitti --classes car"""
 
 LABELS = {
     "mota": "MOTA", "motp": "MOTP", "idf1": "IDF1", "hota": "HOTA",
@@ -100,11 +118,18 @@ COMMON_NOTES = {
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("gt", metavar="GT_FILE", help="ground-truth file (MOTChallenge gt.txt)")
-    parser.add_argument("result", metavar="RESULT_FILE", help="tracker result file")
-    parser.add_argument("--protocol", choices=protocols.PROTOCOLS, default="mot17",
-                        help="scoring protocol (default: mot17, the official one; paper: the "
-                             "paper's Table II scoring, see above)")
+    parser.add_argument("gt", metavar="GT_FILE",
+                        help="ground-truth file (MOTChallenge gt.txt, KITTI label_02/NNNN.txt; "
+                             "kitti: or a folder)")
+    parser.add_argument("result", metavar="RESULT_FILE",
+                        help="tracker result file (kitti: or a folder)")
+    parser.add_argument("--protocol", choices=(*protocols.PROTOCOLS, "kitti"), default=None,
+                        help="scoring protocol (default: kitti for KITTI ground truth, else "
+                             "mot17, the official MOTChallenge one; paper: the paper's Table "
+                             "II scoring, see above)")
+    parser.add_argument("--classes", metavar="LIST",
+                        help="kitti: comma list of the classes to score (car, pedestrian; "
+                             "default both)")
     parser.add_argument("--frames", type=int, metavar="N",
                         help="sequence length (default: seqLength from the ground truth's "
                              "seqinfo.ini, else the last frame in either file)")
@@ -189,12 +214,30 @@ def _sequence_name(args: argparse.Namespace) -> str:
     return Path(args.result).stem
 
 
+def _pick_protocol(args: argparse.Namespace) -> None:
+    """--protocol, or kitti when the ground truth is a KITTI file or folder, else mot17."""
+    if args.protocol is None:
+        from pathlib import Path
+
+        from occtrack.io.kitti import looks_like_kitti
+
+        gt = Path(args.gt)
+        kitti = (gt.is_dir() and ((gt / "label_02").is_dir() or any(gt.glob("*.txt")))
+                 or gt.is_file() and looks_like_kitti(gt))
+        args.protocol = "kitti" if kitti else "mot17"
+    if args.classes is not None and args.protocol != "kitti":
+        raise OcctrackError("--classes picks KITTI's classes; use --protocol kitti")
+
+
 def run(args: argparse.Namespace) -> int:
     from occtrack.io.mot import read_mot
     from occtrack.metrics import protocols
     from occtrack.metrics.evaluate import check_truth, evaluate_frames
 
     start = time.perf_counter()
+    _pick_protocol(args)
+    if args.protocol == "kitti":
+        return _run_kitti(args, start)
     if args.calibration and args.protocol != "mot17":
         raise OcctrackError("--calibration decides which boxes are right as the mot17 protocol "
                             "does; use --protocol mot17")
@@ -276,4 +319,69 @@ def format_reliability(table) -> str:
         right = "-" if table.boxes[b] == 0 else f"{table.right[b]:.3f}"
         lines.append(f"  [{lo:.1f}, {hi:.1f}{close}  {int(table.boxes[b]):>8}{mean:>9}{right:>9}")
     lines.append(f"  ECE {table.ece:.4f} over {table.num_boxes} boxes")
+    return "\n".join(lines)
+
+
+KITTI_COLUMNS = (("hota", "HOTA", ".3f"), ("deta", "DetA", ".3f"), ("assa", "AssA", ".3f"),
+                 ("loca", "LocA", ".3f"), ("mota", "MOTA", ".3f"), ("idf1", "IDF1", ".3f"),
+                 ("id_switches", "IDSW", "d"), ("fp", "FP", "d"), ("fn", "FN", "d"),
+                 ("mostly_tracked", "MT", "d"), ("mostly_lost", "ML", "d"),
+                 ("motp", "MOTP", ".3f"))
+
+
+def _run_kitti(args: argparse.Namespace, start: float) -> int:
+    """`occtrack eval --protocol kitti`: TrackEval's Kitti2DBox, per class and combined."""
+    from occtrack.metrics import trackeval_kitti
+
+    if args.out_dir is not None:
+        raise OcctrackError("--out-dir writes TrackEval's MOTChallenge files; the kitti "
+                            "protocol prints its tables (or --json)")
+    classes = list(trackeval_kitti.CLASSES)
+    if args.classes is not None:
+        classes = list(dict.fromkeys(c.strip().lower() for c in args.classes.split(",")
+                                     if c.strip()))
+        odd = [c for c in classes if c not in trackeval_kitti.CLASSES]
+        if odd or not classes:
+            raise OcctrackError(f"--classes: KITTI's evaluation scores car and pedestrian, "
+                                f"not {odd[0] if odd else 'nothing'!r}")
+    if args.frames is not None and args.frames < 1:
+        raise OcctrackError(f"--frames must be at least 1, got {args.frames}")
+    pairs = trackeval_kitti.sequence_pairs(args.gt, args.result)
+    report = trackeval_kitti.evaluate(pairs, classes, args.frames, args.calibration)
+    for note in report["notes"]:
+        print(f"occtrack eval: note: {note}", file=sys.stderr)
+    if args.json:
+        for entry in report["classes"].values():
+            if "calibration" in entry:
+                entry["calibration"] = entry["calibration"].as_dict()
+        print(json.dumps(report))
+        return 0
+    print(format_kitti(report))
+    if args.calibration:
+        for cls, entry in report["classes"].items():
+            print()
+            print(f"{cls}:")
+            print(format_reliability(entry["calibration"]))
+    print()
+    print(f"scored {len(pairs)} sequence{'s' * (len(pairs) != 1)}, classes "
+          f"{', '.join(classes)}, {time.perf_counter() - start:.2f} s")
+    return 0
+
+
+def format_kitti(report: dict) -> str:
+    """The kitti protocol's tables: per class a row a sequence and TrackEval's combined row."""
+    lines = ["protocol kitti: KITTI tracking's official evaluation, run by TrackEval "
+             "(Kitti2DBox); HOTA, DetA, AssA, LocA: means over the 19 localisation thresholds"]
+    header = f"  {'sequence':<12}" + "".join(f"{title:>8}" for _, title, _ in KITTI_COLUMNS)
+
+    def row(name: str, values: dict) -> str:
+        return f"  {name:<12}" + "".join(
+            f"{'-' if values[key] is None else format(values[key], fmt):>8}"
+            for key, _, fmt in KITTI_COLUMNS)
+
+    for cls, entry in report["classes"].items():
+        lines += ["", cls, header]
+        lines += [row(name, values) for name, values in entry["sequences"].items()]
+        if len(entry["sequences"]) > 1:
+            lines.append(row("COMBINED", entry["combined"]))
     return "\n".join(lines)

@@ -16,7 +16,7 @@ OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
 the two equal)."""
 
 NAME = "track"
-HELP = "track the boxes of a MOTChallenge detection file (PMB tracker with occlusion)"
+HELP = "track the boxes of a MOTChallenge or KITTI detection file (PMB tracker with occlusion)"
 DESCRIPTION = """\
 Track pedestrians (or any boxes) through a MOTChallenge detection file with the
 Gaussian-mixture Poisson multi-Bernoulli tracker, and write a MOTChallenge result file
@@ -25,7 +25,8 @@ The confidence is the probability that the box is a real object at that place (e
 overlaps the true box at IoU >= 0.5); `occtrack eval --calibration` measures how well it
 keeps its word.
 
-Detection rows are frame,id,left,top,width,height,score[,...] (the id is ignored). Occlusion:
+Detection rows are frame,id,left,top,width,height,score[,...] (the id is ignored), or KITTI
+tracking rows (told apart by content, or --format kitti; see below). Occlusion:
   none              a missed detection is evidence that the object is gone
   object-wise       objects hide objects (expected-value approximation; the default)
   measurement-wise  detections hide detections, as a detector's non-maximum suppression does
@@ -45,6 +46,17 @@ linearly onto 0..1; --lenient skips such boxes and clips such scores, with one w
 the counts and the first line. More than --max-gap-frames empty frames in a row (default: a
 day at the frame rate) is an error too, so a stray frame number cannot make the tracker step
 through billions of empty frames.
+
+KITTI: a KITTI tracking file (space separated, frame id type truncated occluded alpha x1 y1
+x2 y2 h w l x y z rotation_y [score], frames 0-based; a file without the 18th column has score
+1) is tracked class by class in one run: each row's type is its class, a track keeps its class
+for life and never takes another class's box, and every class's boxes hide the others' for
+the occlusion models. --classes Car,Pedestrian picks the types (default: every type in the
+file); DontCare rows, unknown types and types not picked are skipped with a count. The result
+is KITTI's result format (the label columns with the reported box; for a box taken from a
+detection, that detection's alpha and 3D columns, else -1 / -1000 / -10; the confidence as
+the score), frames numbered as they came. The image size and frame rate come from the flags,
+else from DIR/seqinfo/NNNN.ini when the file sits in a KITTI layout (DIR/det_02/NAME/NNNN.txt).
 
 The result file is written whole or not at all: to a temporary file beside it, renamed into
 place when complete, so an interrupted run leaves the old file (or none). -o - writes the
@@ -78,10 +90,17 @@ def score_range(text: str) -> tuple[float, float]:
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("detections", metavar="DET_FILE", help="MOTChallenge detection file")
+    parser.add_argument("detections", metavar="DET_FILE",
+                        help="MOTChallenge or KITTI detection file")
     parser.add_argument("-o", "--output", metavar="RESULT_FILE", required=True,
-                        help="where to write the MOTChallenge result file ('-': standard "
-                             "output)")
+                        help="where to write the result file, in the detection file's format "
+                             "('-': standard output)")
+    parser.add_argument("--format", choices=("auto", "mot", "kitti"), default="auto",
+                        help="the detection file's format (default auto: KITTI when the third "
+                             "field of its first row is a type name, else MOTChallenge)")
+    parser.add_argument("--classes", metavar="LIST",
+                        help="KITTI: comma list of types to track, e.g. Car,Pedestrian "
+                             "(default: every type in the file)")
     parser.add_argument("--occlusion", choices=OCCLUSION_NAMES, default=None,
                         help="occlusion model (default: object-wise, or the config "
                              "file's)")
@@ -107,7 +126,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def build_config(args: argparse.Namespace):
     """The tracker settings (a TrackerConfig) and the sequence length (None if unknown) from
     the flags, the sequence's seqinfo.ini and the config file."""
-    from occtrack.io.mot import find_seqinfo, read_seqinfo
+    from occtrack.io.mot import read_seqinfo
     from occtrack.tracker import TrackerConfig
     from occtrack.tracker.config import load_toml
 
@@ -121,7 +140,7 @@ def build_config(args: argparse.Namespace):
             raise OcctrackError(f"not valid TOML: byte {err.start} is not UTF-8",
                                 args.config) from None
     length = None
-    seq = find_seqinfo(args.detections)
+    seq = seqinfo_path(args)
     if seq is not None:
         info = read_seqinfo(seq)
         length = int(info["length"])
@@ -134,9 +153,10 @@ def build_config(args: argparse.Namespace):
         values["fps"] = args.fps
     for key, flag in (("image_size", "--image-size WxH"), ("fps", "--fps HZ")):
         if key not in values:
-            raise OcctrackError(f"{key.replace('_', ' ')} unknown: pass {flag} (no seqinfo.ini "
-                                f"beside the detection folder, no {key} in a --config file)",
-                                args.detections)
+            where = ("DIR/seqinfo/NNNN.ini beside a KITTI layout DIR/det_02/NAME/NNNN.txt"
+                     if is_kitti(args) else "seqinfo.ini beside the detection folder")
+            raise OcctrackError(f"{key.replace('_', ' ')} unknown: pass {flag} (no {where}, no "
+                                f"{key} in a --config file)", args.detections)
     if args.occlusion is not None:
         values["occlusion"] = args.occlusion
     if args.frame_step is not None:
@@ -144,34 +164,106 @@ def build_config(args: argparse.Namespace):
     return TrackerConfig.from_dict(values, source), length
 
 
+def is_kitti(args: argparse.Namespace) -> bool:
+    """Whether the detection file is read as KITTI's (--format, else its content)."""
+    if args.format == "auto":
+        from occtrack.io.kitti import looks_like_kitti
+
+        args.format = "kitti" if looks_like_kitti(args.detections) else "mot"
+    return args.format == "kitti"
+
+
+def seqinfo_path(args: argparse.Namespace):
+    """The sequence information beside the detection file: SEQ/seqinfo.ini for SEQ/det/det.txt,
+    DIR/seqinfo/NNNN.ini for KITTI's DIR/det_02/NAME/NNNN.txt; None where there is none."""
+    from occtrack.io import kitti, mot
+
+    if is_kitti(args):
+        return kitti.find_seqinfo(args.detections)
+    return mot.find_seqinfo(args.detections)
+
+
 def run(args: argparse.Namespace) -> int:
     from occtrack.io.atomic import check_output
-    from occtrack.io.mot import find_seqinfo, read_detections, write_mot
     from occtrack.progress import summary
     from occtrack.tracker import Tracker
 
-    seq = find_seqinfo(args.detections)
+    kitti = is_kitti(args)
+    if args.classes is not None and not kitti:
+        raise OcctrackError("--classes picks KITTI types; this is a MOTChallenge file (pass "
+                            "--format kitti if it is not)", args.detections)
+    seq = seqinfo_path(args)
     check_output(args.output, args.force,
-                 (args.detections, args.config, seq and seq / "seqinfo.ini"))
+                 (args.detections, args.config,
+                  seq and (seq if str(seq).endswith(".ini") else seq / "seqinfo.ini")))
     config, length = build_config(args)
     gap = args.max_gap_frames
     if gap is None:
         gap = math.ceil(24 * 3600 * config.fps)
-    detections, warning = read_detections(
-        args.detections, config.image_size, score_range=args.score_range,
-        lenient=args.lenient, max_gap_frames=gap, num_frames=length)
-    if warning:
-        print(f"occtrack track: warning: {warning}", file=sys.stderr)
+    detections, notes, source = _read(args, config, gap, length)
+    for note in notes:
+        print(f"occtrack track: warning: {note}", file=sys.stderr)
     if len(detections.frame) == 0:
         print(f"occtrack track: warning: {args.detections} holds no detections, so the "
               f"result has no tracks", file=sys.stderr)
     frames = max(length or 0, detections.num_frames)
     start = time.perf_counter()
     result = Tracker(config).run(detections, frames, quiet=args.quiet,
-                                 desc=f"tracking ({config.occlusion})")
-    write_mot(args.output, result.frame, result.id, result.box, result.confidence,
-              overwrite=args.force)
+                                 desc=f"tracking ({config.occlusion})", classes=kitti)
+    if kitti:
+        _write_kitti(args, result, source)
+    else:
+        from occtrack.io.mot import write_mot
+
+        write_mot(args.output, result.frame, result.id, result.box, result.confidence,
+                  overwrite=args.force)
     if not args.quiet:
         print(summary(result.frames, result.num_tracks, time.perf_counter() - start),
               file=sys.stderr if args.output == "-" else sys.stdout)
     return 0
+
+
+def _read(args: argparse.Namespace, config, gap: int, length: int | None):
+    """The detections to track (a MotTable, checked), the warnings to print, and for KITTI the
+    file's table with each tracked row's row in it (None for MOTChallenge)."""
+    import numpy as np
+
+    from occtrack.io.mot import check_detections, read_detections
+
+    check = {"score_range": args.score_range, "lenient": args.lenient, "max_gap_frames": gap,
+             "num_frames": length}
+    if not is_kitti(args):
+        detections, warning = read_detections(args.detections, config.image_size, **check)
+        return detections, [warning] if warning else [], None
+    from occtrack.io import kitti
+
+    table = kitti.read_kitti(args.detections)
+    classes = None if args.classes is None else kitti.parse_classes(args.classes)
+    mot, rows, note = kitti.detections_to_mot(table, classes)
+    if length is not None and len(mot) and mot.num_frames > length:
+        i = int(np.argmax(mot.frame))
+        raise OcctrackError(f"frame {mot.frame[i] - 1} is past the sequence's {length} frames "
+                            f"(0..{length - 1}, seqinfo)", args.detections, int(mot.line[i]))
+    checked, warning = check_detections(mot, config.image_size, **check)
+    kept = np.isin(mot.line, checked.line)  # --lenient may skip rows
+    return checked, [w for w in (note, warning) if w], (table, rows[kept])
+
+
+def _write_kitti(args: argparse.Namespace, result, source) -> None:
+    """The KITTI result file: frames back to 0-based, corners, the type of each track, and the
+    3D columns of the detection a box was taken from."""
+    import numpy as np
+
+    from occtrack.io.kitti import UNKNOWN_3D, write_kitti
+
+    table, rows = source
+    took = result.detection_row
+    n = len(result.frame)
+    box3d = np.tile(UNKNOWN_3D, (n, 1))
+    alpha = np.full(n, -10.0)
+    hit = took >= 0
+    box3d[hit] = table.box3d[rows[took[hit]]]
+    alpha[hit] = table.alpha[rows[took[hit]]]
+    corners = np.concatenate([result.box[:, :2], result.box[:, :2] + result.box[:, 2:]], axis=1)
+    write_kitti(args.output, result.frame - 1, result.id, result.classes, corners,
+                result.confidence, box3d, alpha, overwrite=args.force)

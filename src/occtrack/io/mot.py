@@ -176,7 +176,16 @@ def read_detections(path: str | os.PathLike, image_size: tuple[float, float], *,
     [0, 1] (after `score_range` (lo, hi) maps lo..hi linearly onto 0..1) is an error naming
     its line, unless `lenient`: then such boxes are skipped and such scores clipped, and the
     warning gives the counts and the first line of each."""
-    table = _read(str(path), "det")
+    return check_detections(_read(str(path), "det"), image_size, score_range=score_range,
+                            lenient=lenient, max_gap_frames=max_gap_frames,
+                            num_frames=num_frames)
+
+
+def check_detections(table: MotTable, image_size: tuple[float, float], *,
+                     score_range: tuple[float, float] | None = None, lenient: bool = False,
+                     max_gap_frames: int | None = None,
+                     num_frames: int | None = None) -> tuple[MotTable, str | None]:
+    """`read_detections`' checks on a table already read (from any format)."""
     width, height = image_size
     left, top, w, h = table.box.T
     bad_size = (w <= 0) | (h <= 0)
@@ -279,15 +288,18 @@ def write_mot(path: str | os.PathLike, frame: np.ndarray, ids: np.ndarray, box: 
 
 
 def read_seqinfo(folder: str | os.PathLike) -> dict[str, int | str]:
-    """`seqinfo.ini` of a MOTChallenge sequence folder: name, imWidth, imHeight, seqLength,
-    frameRate."""
-    ini = Path(folder) / "seqinfo.ini"
+    """`seqinfo.ini` of a MOTChallenge sequence folder (or an .ini file itself, as KITTI's
+    `seqinfo/NNNN.ini`): name, imWidth, imHeight, seqLength, frameRate."""
+    ini = Path(folder)
+    if not (ini.suffix == ".ini" and ini.is_file()):
+        ini = ini / "seqinfo.ini"
     parser = configparser.ConfigParser()
     try:
         with open(ini, encoding="utf-8") as fh:
             parser.read_file(fh)
         s = parser["Sequence"]
-        info = {"name": s.get("name", Path(folder).name), "width": int(s["imWidth"]),
+        default = ini.parent.name if ini.name == "seqinfo.ini" else ini.stem
+        info = {"name": s.get("name", default), "width": int(s["imWidth"]),
                 "height": int(s["imHeight"]), "length": int(s["seqLength"]),
                 "fps": int(float(s.get("frameRate", "30")))}
     except FileNotFoundError:

@@ -142,6 +142,9 @@ class TrackResult:
     coasting: np.ndarray | None = None  # (N,) bool: reported without a detection
     occluded: np.ndarray | None = None  # (N,) bool: ... and its miss put down to occlusion
     confidence: np.ndarray | None = None  # (N,) Tracks.confidence: the result file's 7th column
+    classes: np.ndarray | None = None  # (N,) Tracks.classes: each object's class for life
+    detection_row: np.ndarray | None = None  # (N,) the row of the MotTable run on whose box the
+    # object took in its frame, -1 where none (coasting, or a frame carried between steps)
 
     @property
     def num_tracks(self) -> int:
@@ -335,14 +338,16 @@ class Tracker:
         return tracks
 
     def run(self, detections: MotTable | Iterable[npt.ArrayLike], num_frames: int | None = None,
-            quiet: bool = True, desc: str = "tracking") -> TrackResult:
+            quiet: bool = True, desc: str = "tracking", classes: bool = False) -> TrackResult:
         """Track a whole sequence, reporting at every frame.
 
         `detections` is a MotTable (frames 1..num_frames; `occtrack.io.mot.read_detections`
         reads one from a file) or one array per frame, (M, 4) boxes left, top, width, height
         or (M, 5) boxes and scores. Every `frame_step`-th frame is tracked, starting with the
         first; in between, the last tracks are carried along their velocities. Frames are
-        read one at a time, so a long stream is never held in memory (only the result rows)."""
+        read one at a time, so a long stream is never held in memory (only the result rows).
+        `classes` (a MotTable only): its `cls` column is each detection's class (`step`'s
+        `classes`), as KITTI's types are (`occtrack.io.kitti`)."""
         if isinstance(detections, str | bytes | os.PathLike):
             raise ValueError(f"Tracker.run takes detections, not a file name ({detections!r}):"
                              f" read the file first, e.g. occtrack.io.mot.read_detections("
@@ -356,21 +361,26 @@ class Tracker:
         elif total is None and hasattr(detections, "__len__"):
             total = len(detections)
         c = self.config
-        rows: dict[str, list] = {k: [] for k in ("frame", "id", "box", "r", "coast", "occ",
-                                                 "conf")}
+        keys = ("frame", "id", "box", "r", "coast", "occ", "conf", "cls", "row")
+        rows: dict[str, list] = {k: [] for k in keys}
         tracks = None
         seconds = 0.0
         count = 0
-        for index, (boxes, scores) in enumerate(progress(_frames(detections, num_frames), total,
-                                                         desc, quiet)):
+        frames = _frames(detections, num_frames, classes)
+        for index, (boxes, scores, labels, source) in enumerate(progress(frames, total, desc,
+                                                                         quiet)):
             count += 1
             offset = index % c.frame_step
             start = time.perf_counter()
             if offset == 0:
-                tracks = self.step(boxes, scores)
+                tracks = self.step(boxes, scores, classes=labels)
                 shown = tracks
+                took = shown.detection_index
+                row = np.where(took >= 0, source[np.maximum(took, 0)] if len(source) else -1,
+                               -1)
             else:
                 shown = tracks.moved(offset / c.fps)
+                row = np.full(len(shown), -1)
             seconds += time.perf_counter() - start
             rows["frame"].append(np.full(len(shown), index + 1))
             rows["id"].append(shown.ids)
@@ -379,20 +389,30 @@ class Tracker:
             rows["coast"].append(shown.coasting)
             rows["occ"].append(shown.occluded)
             rows["conf"].append(shown.confidence)
+            rows["cls"].append(shown.classes)
+            rows["row"].append(row.astype(np.int64))
         if not count:
             return TrackResult(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 4)),
                                np.zeros(0), 0, seconds, np.zeros(0, bool), np.zeros(0, bool),
-                               np.zeros(0))
+                               np.zeros(0), np.zeros(0, int), np.zeros(0, int))
         return TrackResult(*(np.concatenate(rows[k]) for k in ("frame", "id", "box", "r")),
                            count, seconds, *(np.concatenate(rows[k])
-                                             for k in ("coast", "occ", "conf")))
+                                             for k in ("coast", "occ", "conf", "cls", "row")))
 
 
-def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+def _frames(detections, num_frames: int | None, classes: bool = False
+            ) -> Iterator[tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray]]:
+    """Per frame: boxes (ltwh), scores, classes (None: one class) and the detections' rows in
+    the MotTable (empty for arrays)."""
     if isinstance(detections, MotTable):
         for rows in detections.frame_slices(num_frames):
-            yield detections.box[rows], detections.score[rows]
+            yield (detections.box[rows], detections.score[rows],
+                   detections.cls[rows] if classes else None, rows)
         return
+    if classes:
+        raise ValueError("Tracker.run(classes=True) takes a MotTable, whose cls column holds "
+                         "the classes")
+    none = np.zeros(0, dtype=np.int64)
     for index, frame in enumerate(detections):
         if num_frames is not None and index >= num_frames:
             return
@@ -402,4 +422,4 @@ def _frames(detections, num_frames: int | None) -> Iterator[tuple[np.ndarray, np
         if arr.ndim != 2 or arr.shape[1] not in (4, 5):
             raise ValueError(f"frame {index + 1}: detections must be (M, 4) or (M, 5), "
                              f"not {arr.shape}")
-        yield arr[:, :4], (arr[:, 4] if arr.shape[1] == 5 else None)
+        yield arr[:, :4], (arr[:, 4] if arr.shape[1] == 5 else None), None, none
