@@ -65,3 +65,14 @@ def mot17_04() -> Path:
 @pytest.fixture(scope="session")
 def mot17_04_gt(mot17_04) -> Path:
     return mot17_04 / "gt" / "gt.txt"
+
+
+@pytest.fixture(scope="session")
+def kitti_root() -> Path:
+    """The KITTI tracking folder beside the checkout (label_02/, det_02/rrc/, det_02/pointrcnn/,
+    seqinfo/); skip, or fail in CI, without it."""
+    root = CHECKOUT.parent / "shared" / "data" / "kitti"
+    if not (root / "det_02").is_dir() or not (root / "seqinfo").is_dir():
+        data_missing(f"KITTI tracking data not found: no det_02/ and seqinfo/ in {root} "
+                     f"(../shared/data/kitti of the checkout)")
+    return root

@@ -152,8 +152,25 @@ def _quiet_stdout() -> None:
         pass
 
 
+NEGATIVE_VALUED = ("--score-range",)
+"""Options whose value may start with a minus sign (`--score-range -10,10`), which argparse
+would otherwise read as an option of its own."""
+
+
+def _join_negative_values(argv: list[str]) -> list[str]:
+    """`--score-range -10,10` as `--score-range=-10,10`, so that a value starting with a minus
+    sign reaches its option."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] in NEGATIVE_VALUED and arg.startswith("-") and arg[1:2].isdigit():
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else list(argv)
+    argv = _join_negative_values(sys.argv[1:] if argv is None else list(argv))
     parser = build_parser(_command_of(argv))
     args = parser.parse_args(argv)
     if not hasattr(args, "_run"):

@@ -7,7 +7,7 @@ import sys
 import time
 
 NAME = "benchmark"
-HELP = "occtrack's occlusion models and the peer trackers on MOTChallenge sequence folders"
+HELP = "occtrack's occlusion models and the peer trackers on MOTChallenge or KITTI folders"
 DESCRIPTION = """\
 Track every sequence folder under DIR (or DIR itself, if it is one) with occtrack under each
 occlusion model (none, measurement-wise, object-wise; every other setting the default) and
@@ -59,8 +59,29 @@ protocol scores, lists with one entry a frame (entry t is frame t + 1):
                 occtrack, "state" (0 detected, 1 coasting without a detection, 2 coasting and
                 put down to occlusion). MOT17's three sequences, five trackers: 9 MB.
 
+KITTI: a KITTI tracking folder (DIR/label_02/NNNN.txt, DIR/det_02/NAME/NNNN.txt,
+DIR/seqinfo/NNNN.ini, DIR/evaluate_tracking.seqmap naming the sequences) is recognised by its
+layout (or --layout kitti). The detections are det_02/NAME (--detections NAME; default: the
+only folder there, else rrc). Every sequence is scored by KITTI's protocol (TrackEval's
+Kitti2DBox, as occtrack eval --protocol kitti) for car and pedestrian apart (--classes picks):
+occtrack tracks all classes in one run (a track keeps its class; every box hides the others
+for the occlusion models), each peer one class at a time. Tables per class: each sequence with
+a scored true box of the class, TrackEval's COMBINED_SEQ, the mean over those sequences; the
+frame rate is seqinfo's. The JSON is
+  {"protocol": "kitti", "layout": "kitti", "folder", "detections", "trackers", "classes",
+   "sequences": {NAME: {"frames", "fps", "image_size",
+                        "classes": {CLASS: {"truth": scored true boxes,
+                                            "trackers": {TRACKER: SCORES},
+                                            "calibration": {TRACKER: TABLE}}}}},
+   "combined": {"method", "classes": {CLASS: {"trackers": {TRACKER: SCORES},
+                                              "calibration": {TRACKER: TABLE}}}},
+   "mean": {"method", "classes": {CLASS: {"trackers": {TRACKER: {hota, ...}}}}}}
+and occtrack report draws it (tables and calibration; --per-frame and --keep-boxes are
+MOTChallenge's only).
+
 examples:
   occtrack benchmark $OCCTRACK_DATA
+  occtrack benchmark ../shared/data/kitti --json kitti.json --quiet
   occtrack benchmark MOT17-04-FRCNN --trackers measurement-wise,bytetrack,botsort
   occtrack benchmark $OCCTRACK_DATA --json benchmark.json --quiet
   occtrack benchmark $OCCTRACK_DATA --json run.json --keep-boxes  # for occtrack report run.json
@@ -77,6 +98,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "extra: occluboost, boxmot-botsort, boosttrack, "
                              "boxmot-bytetrack, boxmot-ocsort, sfsort, hybridsort, "
                              "deepocsort")
+    parser.add_argument("--layout", choices=("auto", "mot", "kitti"), default="auto",
+                        help="the folder's layout (default auto: kitti when DIR holds "
+                             "label_02/ and det_02/, else MOTChallenge sequence folders)")
+    parser.add_argument("--detections", metavar="NAME",
+                        help="kitti: the detector folder det_02/NAME (default: the only one, "
+                             "else rrc)")
+    parser.add_argument("--classes", metavar="LIST",
+                        help="kitti: comma list of classes to score (car, pedestrian; default "
+                             "both)")
     parser.add_argument("--json", metavar="FILE",
                         help="write the scores as JSON to FILE (- prints them instead of the "
                              "tables)")
@@ -95,14 +125,19 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from occtrack.errors import OcctrackError
-    from occtrack.experiments import benchmark, sweep
+    from occtrack.experiments import benchmark, benchmark_kitti, sweep
     from occtrack.io.atomic import atomic_write, check_output
     from occtrack.progress import summary
 
+    kitti = args.layout == "kitti" or (args.layout == "auto"
+                                        and benchmark_kitti.is_layout(args.root))
+    classes = _kitti_options(args, kitti)
     if args.json is not None:
         inputs = [args.root]
-        for folder in benchmark.find_sequences(args.root):
-            inputs += [folder / "seqinfo.ini", folder / "det" / "det.txt", folder / "gt" / "gt.txt"]
+        if not kitti:
+            for folder in benchmark.find_sequences(args.root):
+                inputs += [folder / "seqinfo.ini", folder / "det" / "det.txt",
+                           folder / "gt" / "gt.txt"]
         check_output(args.json, args.force, inputs)
     if (args.per_frame or args.keep_boxes) and args.json is None:
         option = "--keep-boxes" if args.keep_boxes else "--per-frame"
@@ -123,9 +158,13 @@ def run(args: argparse.Namespace) -> int:
                   "\"occtrack[sweep]\"): the runs go one by one in this process",
                   file=sys.stderr)
     start = time.perf_counter()
-    report = benchmark.benchmark(args.root, trackers, quiet=args.quiet,
-                                 per_frame=args.per_frame, keep_boxes=args.keep_boxes,
-                                 engine=engine)
+    if kitti:
+        report = benchmark_kitti.benchmark(args.root, trackers, args.detections, classes,
+                                           quiet=args.quiet, engine=engine)
+    else:
+        report = benchmark.benchmark(args.root, trackers, quiet=args.quiet,
+                                     per_frame=args.per_frame, keep_boxes=args.keep_boxes,
+                                     engine=engine)
     seconds = time.perf_counter() - start
 
     text = benchmark.to_json(report)
@@ -135,10 +174,39 @@ def run(args: argparse.Namespace) -> int:
         if args.json is not None:
             with atomic_write(args.json, args.force) as fh:
                 fh.write(text)
-        print(benchmark.format_report(report))
+        print((benchmark_kitti if kitti else benchmark).format_report(report))
     if not args.quiet:
         frames = sum(entry["frames"] for entry in report["sequences"].values()) * len(trackers)
-        tracks = sum(values["tracks"] for values in report["combined"]["trackers"].values())
+        combined = ([part["trackers"] for part in report["combined"]["classes"].values()]
+                    if kitti else [report["combined"]["trackers"]])
+        tracks = sum(values["tracks"] for part in combined for values in part.values())
         print(summary(frames, tracks, seconds),
               file=sys.stderr if args.json == "-" else sys.stdout)
     return 0
+
+
+def _kitti_options(args: argparse.Namespace, kitti: bool) -> tuple[str, ...]:
+    """The classes to score (kitti), after refusing the options that do not fit the layout."""
+    from occtrack.errors import OcctrackError
+
+    if not kitti:
+        for option, value in (("--detections", args.detections), ("--classes", args.classes)):
+            if value is not None:
+                raise OcctrackError(f"{option} is for a KITTI folder (label_02/, det_02/); "
+                                    f"{args.root} is not one (or pass --layout kitti)")
+        return ()
+    if args.per_frame or args.keep_boxes:
+        option = "--keep-boxes" if args.keep_boxes else "--per-frame"
+        raise OcctrackError(f"{option} is for MOTChallenge folders; a KITTI run keeps the "
+                            f"tables and calibration only")
+    from occtrack.metrics.trackeval_kitti import CLASSES
+
+    if args.classes is None:
+        return CLASSES
+    classes = tuple(dict.fromkeys(c.strip().lower() for c in args.classes.split(",")
+                                  if c.strip()))
+    odd = [c for c in classes if c not in CLASSES]
+    if odd or not classes:
+        raise OcctrackError(f"--classes: KITTI's evaluation scores car and pedestrian, not "
+                            f"{odd[0] if odd else 'nothing'!r}")
+    return classes

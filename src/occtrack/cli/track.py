@@ -211,7 +211,7 @@ def run(args: argparse.Namespace) -> int:
     result = Tracker(config).run(detections, frames, quiet=args.quiet,
                                  desc=f"tracking ({config.occlusion})", classes=kitti)
     if kitti:
-        _write_kitti(args, result, source)
+        _write_kitti(args, config, result, source)
     else:
         from occtrack.io.mot import write_mot
 
@@ -249,12 +249,13 @@ def _read(args: argparse.Namespace, config, gap: int, length: int | None):
     return checked, [w for w in (note, warning) if w], (table, rows[kept])
 
 
-def _write_kitti(args: argparse.Namespace, result, source) -> None:
-    """The KITTI result file: frames back to 0-based, corners, the type of each track, and the
-    3D columns of the detection a box was taken from."""
+def _write_kitti(args: argparse.Namespace, config, result, source) -> None:
+    """The KITTI result file: frames back to 0-based, corners clipped to the image (as KITTI's
+    labels are), the type of each track, and the 3D columns of the detection a box was taken
+    from."""
     import numpy as np
 
-    from occtrack.io.kitti import UNKNOWN_3D, write_kitti
+    from occtrack.io.kitti import UNKNOWN_3D, clip_to_image, write_kitti
 
     table, rows = source
     took = result.detection_row
@@ -264,6 +265,8 @@ def _write_kitti(args: argparse.Namespace, result, source) -> None:
     hit = took >= 0
     box3d[hit] = table.box3d[rows[took[hit]]]
     alpha[hit] = table.alpha[rows[took[hit]]]
-    corners = np.concatenate([result.box[:, :2], result.box[:, :2] + result.box[:, 2:]], axis=1)
+    corners = clip_to_image(np.concatenate([result.box[:, :2],
+                                            result.box[:, :2] + result.box[:, 2:]], axis=1),
+                            config.image_size)
     write_kitti(args.output, result.frame - 1, result.id, result.classes, corners,
                 result.confidence, box3d, alpha, overwrite=args.force)

@@ -253,6 +253,14 @@ def write_kitti(path: str | os.PathLike, frame: np.ndarray, ids: np.ndarray, typ
                      f"{l:.6f} {x:.6f} {y:.6f} {z:.6f} {ry:.6f} {score[i]:.4f}\n")
 
 
+def clip_to_image(box: np.ndarray, image_size: tuple[float, float]) -> np.ndarray:
+    """Corners x1, y1, x2, y2 clipped to the image [0, width] x [0, height], as KITTI's labels
+    are (a tracker's box runs past a border it cannot see; scored against a clipped label,
+    the part outside only costs overlap)."""
+    width, height = image_size
+    return np.clip(box, 0.0, [width, height, width, height])
+
+
 def sequence_name(path: str | os.PathLike) -> str:
     """A KITTI file's sequence name: its stem (`0000` for `label_02/0000.txt`)."""
     return Path(path).stem
