@@ -109,7 +109,7 @@ def _overlay(args: argparse.Namespace, image_size: tuple[int, int], video_fps: f
     track_args = argparse.Namespace(
         detections=args.source, config=args.config, image_size=tuple(map(float, image_size)),
         fps=args.fps or (video_fps if seq_fps is None else None), occlusion=args.occlusion,
-        frame_step=None)
+        frame_step=None, format="mot")
     config, length = build_config(track_args)
     detections, warning = read_detections(args.source, config.image_size,
                                           score_range=args.score_range, lenient=args.lenient)

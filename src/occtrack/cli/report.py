@@ -64,6 +64,8 @@ def run(args: argparse.Namespace) -> int:
         note = ("" if viewers == len(entries) else
                 "; for plots and the frame viewer make the JSON with occtrack benchmark DIR "
                 "--json FILE --keep-boxes")
+        if report.get("layout") == "kitti":
+            note = f" ({', '.join(report['classes'])} apart; KITTI runs keep no boxes)"
         size = len(page.encode())
         size_text = f"{size / 1e6:.1f} MB" if size >= 1e6 else f"{size / 1e3:.0f} kB"
         print(f"{where}: {_count(len(entries), 'sequence')}, "

@@ -165,12 +165,13 @@ def build_config(args: argparse.Namespace):
 
 
 def is_kitti(args: argparse.Namespace) -> bool:
-    """Whether the detection file is read as KITTI's (--format, else its content)."""
-    if args.format == "auto":
+    """Whether the detection file is read as KITTI's (--format, else its content; a caller's
+    namespace without --format reads MOTChallenge)."""
+    if getattr(args, "format", "mot") == "auto":
         from occtrack.io.kitti import looks_like_kitti
 
         args.format = "kitti" if looks_like_kitti(args.detections) else "mot"
-    return args.format == "kitti"
+    return getattr(args, "format", "mot") == "kitti"
 
 
 def seqinfo_path(args: argparse.Namespace):
@@ -184,18 +185,20 @@ def seqinfo_path(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from occtrack.io import kitti as kitti_io
+    from occtrack.io import mot
     from occtrack.io.atomic import check_output
     from occtrack.progress import summary
     from occtrack.tracker import Tracker
 
+    seq = mot.find_seqinfo(args.detections)  # either layout's, before the file is opened
+    check_output(args.output, args.force,
+                 (args.detections, args.config, seq and seq / "seqinfo.ini",
+                  kitti_io.find_seqinfo(args.detections)))
     kitti = is_kitti(args)
     if args.classes is not None and not kitti:
         raise OcctrackError("--classes picks KITTI types; this is a MOTChallenge file (pass "
                             "--format kitti if it is not)", args.detections)
-    seq = seqinfo_path(args)
-    check_output(args.output, args.force,
-                 (args.detections, args.config,
-                  seq and (seq if str(seq).endswith(".ini") else seq / "seqinfo.ini")))
     config, length = build_config(args)
     gap = args.max_gap_frames
     if gap is None:

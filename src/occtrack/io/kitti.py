@@ -108,6 +108,8 @@ def parse_classes(text: str) -> list[int]:
 def looks_like_kitti(path: str | os.PathLike) -> bool:
     """Whether a text file is in KITTI's format: its first row's third field is a word (a type
     name) where a MOTChallenge row has a number. Unreadable files are left to the reader."""
+    if not Path(path).is_file():  # a FIFO or device is read once, by the reader
+        return False
     try:
         with open(path, encoding="utf-8", errors="replace") as fh:
             for raw in fh:

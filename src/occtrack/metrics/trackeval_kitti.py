@@ -128,16 +128,20 @@ def _raw(table: KittiTable, num_frames: int, is_gt: bool) -> tuple[dict, list[np
 
 
 def check_result(result: KittiTable) -> None:
-    """Refuse a result that gives one id to two boxes of a frame (TrackEval would, without
-    the lines)."""
+    """Refuse a result that gives one id to two boxes of one class in a frame (TrackEval
+    would, without the lines). Ids are a class's own: a car and a pedestrian may share one, as
+    trackers that number each class apart write them."""
     rows, _ = _scored_rows(result, False)
-    twice = first_duplicate(result.frame[rows], result.id[rows])
-    if twice is not None:
-        a, b = (rows[i] for i in twice)
+    for kind in np.unique(result.type[rows]):
+        same = rows[result.type[rows] == kind]
+        twice = first_duplicate(result.frame[same], result.id[same])
+        if twice is None:
+            continue
+        a, b = (same[i] for i in twice)
         lines = ("" if result.line is None else
                  f" (lines {result.line[a]} and {result.line[b]})")
-        raise OcctrackError(f"id {result.id[a]} appears twice in frame {result.frame[a]}"
-                            f"{lines}", result.path or None,
+        raise OcctrackError(f"id {result.id[a]} appears twice among the {TYPES[kind]} boxes of "
+                            f"frame {result.frame[a]}{lines}", result.path or None,
                             None if result.line is None else int(result.line[b]))
 
 

@@ -22,7 +22,8 @@ import numpy as np
 from occtrack import __version__
 from occtrack.errors import OcctrackError
 
-__all__ = ["COLUMNS", "build_page", "check_report", "load_report", "start_frame"]
+__all__ = ["COLUMNS", "build_page", "check_report", "class_views", "load_report",
+           "start_frame"]
 
 # key, title, format, which way is better, what it is
 COLUMNS = (
@@ -93,11 +94,49 @@ def _need(condition: bool, path: str, what: str) -> None:
         raise _fail(path, what)
 
 
+def class_views(report: dict, path: str = "<report>") -> list[tuple[str, dict]]:
+    """The report as (class, report of that class) pairs, each of the MOTChallenge shape: a
+    KITTI report (`occtrack.experiments.benchmark_kitti`) gives one a class that has a scored
+    true box in some sequence, holding those sequences; any other report is one view ("")."""
+    if not (isinstance(report, dict) and report.get("layout") == "kitti"):
+        return [("", report)]
+    for key in ("classes", "trackers", "sequences", "combined", "mean"):
+        _need(key in report, path, f"no {key!r} key")
+    views = []
+    try:
+        for cls in report["classes"]:
+            sequences = {}
+            for name, entry in report["sequences"].items():
+                part = entry["classes"][cls]
+                if part["truth"]:
+                    sequences[name] = {"frames": entry["frames"], "fps": entry["fps"],
+                                       "image_size": entry["image_size"],
+                                       "trackers": part["trackers"],
+                                       "calibration": part["calibration"]}
+            if sequences:
+                views.append((cls, {
+                    "protocol": report.get("protocol"), "trackers": report["trackers"],
+                    "sequences": sequences, "combined_over": len(report["sequences"]),
+                    "combined": {"method": report["combined"].get("method", ""),
+                                 **report["combined"]["classes"][cls]},
+                    "mean": {"method": report["mean"].get("method", ""),
+                             **report["mean"]["classes"][cls]}}))
+    except (KeyError, TypeError, AttributeError) as err:
+        raise _fail(path, f"a KITTI report without {err}") from None
+    _need(bool(views), path, "no class has a scored true box in any sequence")
+    return views
+
+
 def check_report(data: object, path: str = "<report>") -> None:
     """Raise OcctrackError, naming `path` and what is wrong, unless `data` has the shape
-    `occtrack benchmark --help` gives (the per-frame lists and boxes are optional)."""
+    `occtrack benchmark --help` gives (the per-frame lists and boxes are optional; a KITTI
+    report is checked class by class)."""
     _need(isinstance(data, dict), path, "the top level is not an object")
     assert isinstance(data, dict)
+    if data.get("layout") == "kitti":
+        for _, view in class_views(data, path):
+            check_report(view, path)
+        return
     for key in ("trackers", "sequences", "combined", "mean"):
         _need(key in data, path, f"no {key!r} key")
     trackers = data["trackers"]
@@ -627,18 +666,20 @@ SCRIPT = r"""
 """
 
 
-def _embedded(report: dict) -> str:
-    """What the viewer needs, as JSON safe inside a <script> element."""
+def _embedded(views: list[tuple[str, dict]]) -> str:
+    """What the viewer needs, as JSON safe inside a <script> element (the sequences of every
+    view, in page order)."""
     sequences = []
-    for entry in report["sequences"].values():
-        item = {"frames": entry["frames"], "fps": entry.get("fps"),
-                "image_size": entry["image_size"]}
-        if entry.get("boxes") and entry["boxes"].get("trackers"):
-            item["boxes"] = entry["boxes"]
-            if entry.get("per_frame"):
-                item["per_frame"] = entry["per_frame"]
-                item["start"] = start_frame(entry)
-        sequences.append(item)
+    for _, report in views:
+        for entry in report["sequences"].values():
+            item = {"frames": entry["frames"], "fps": entry.get("fps"),
+                    "image_size": entry["image_size"]}
+            if entry.get("boxes") and entry["boxes"].get("trackers"):
+                item["boxes"] = entry["boxes"]
+                if entry.get("per_frame"):
+                    item["per_frame"] = entry["per_frame"]
+                    item["start"] = start_frame(entry)
+            sequences.append(item)
     text = json.dumps({"sequences": sequences}, separators=(",", ":"), allow_nan=False)
     return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
 
@@ -668,55 +709,44 @@ def _anchor(index: int) -> str:
     return f"seq-{index + 1}"
 
 
+PROTOCOL_TEXT = {
+    "mot17": "TrackEval: MotChallenge2DBox preprocessing, IoU &ge; 0.5",
+    "kitti": "TrackEval: Kitti2DBox preprocessing, IoU &ge; 0.5, each class scored apart",
+}
+
+
 def build_page(report: dict, source: str = "", title: str | None = None,
                show: str | None = None) -> str:
     """The HTML page of a benchmark report (the dict `occtrack benchmark --json` writes).
-    `show` is the tracker the frame viewers open with (default: the first)."""
+    `show` is the tracker the frame viewers open with (default: the first). A KITTI report
+    gets one part a class."""
     check_report(report, source or "<report>")
+    views = class_views(report, source or "<report>")
     trackers = list(report["trackers"])
-    for entry in report["sequences"].values():
-        trackers += [name for name in entry["trackers"] if name not in trackers]
+    for _, view in views:
+        for entry in view["sequences"].values():
+            trackers += [name for name in entry["trackers"] if name not in trackers]
     if show is not None and show not in trackers:
         raise OcctrackError(f"no tracker {show!r} in this report; choose from "
                             + ", ".join(trackers), source or None)
     colors = _colors(trackers)
-    sequences = list(report["sequences"].items())
-    count = len(sequences)
-    title = title or ("occtrack benchmark: " + ", ".join(name for name, _ in sequences[:4])
+    names = list(report["sequences"])
+    count = len(names)
+    title = title or ("occtrack benchmark: " + ", ".join(names[:4])
                       + (f" and {count - 4} more" if count > 4 else ""))
-    nav = " ".join(f'<a href="#{_anchor(i)}">{_esc(name)}</a>'
-                   for i, (name, _) in enumerate(sequences))
-    combined = report["combined"]
-    mean = report["mean"]
-    mean_columns = [c for c in COLUMNS if c[0] in MEAN_KEYS]
+    protocol = report.get("protocol", "?")
     body = [
         f"<h1>{_esc(title)}</h1>",
-        f'<p class="meta">Protocol {_esc(report.get("protocol", "?"))} (TrackEval: '
-        f"MotChallenge2DBox preprocessing, IoU &ge; 0.5); HOTA, DetA, AssA and LocA are means "
-        f"over the 19 localisation thresholds; frames/s is the tracker call alone. "
-        f"{count} sequence{'s' if count != 1 else ''}, {len(trackers)} trackers"
-        f"{', from ' + _esc(source) if source else ''}. The best value of each column is in "
-        f"bold; hover over a column's name for what it is.</p>",
-        f"<nav>Sequences: {nav} <a href=\"#combined\">combined</a></nav>",
-        '<section id="combined">',
-        f"<h2>Combined over {count} sequence{'s' if count != 1 else ''}</h2>",
-        f'<p class="meta">{_esc(combined.get("method", ""))}.</p>',
-        _table(combined["trackers"], colors, table_id="combined-table"),
-        _reliability_diagram(combined.get("calibration"), colors, _DIAGRAM_TITLE
-                             + f" (the boxes of all {count} pooled)"),
-        f"<h2>Mean over {count} sequence{'s' if count != 1 else ''}</h2>",
-        f'<p class="meta">{_esc(mean.get("method", ""))}.</p>',
-        _table(mean["trackers"], colors, mean_columns, table_id="mean-table"),
-        "</section>",
+        f'<p class="meta">Protocol {_esc(protocol)} ({PROTOCOL_TEXT.get(protocol, "")}); '
+        f"HOTA, DetA, AssA and LocA are means over the 19 localisation thresholds; frames/s "
+        f"is the tracker call alone. {count} sequence{'s' if count != 1 else ''}, "
+        f"{len(trackers)} trackers{', from ' + _esc(source) if source else ''}. The best "
+        f"value of each column is in bold; hover over a column's name for what it is.</p>",
     ]
-    for i, (name, entry) in enumerate(sequences):
-        body += [f'<section id="{_anchor(i)}">',
-                 f"<h2>{_esc(_sequence_title(name, entry))}</h2>",
-                 _table(entry["trackers"], colors),
-                 _reliability_diagram(entry.get("calibration"), colors, _DIAGRAM_TITLE),
-                 _plots(entry, colors, i),
-                 _viewer(entry, i, show),
-                 "</section>"]
+    index = 0
+    for cls, view in views:
+        part, index = _view_body(view, cls, colors, show, index)
+        body += part
     body.append(f'<footer>Made by occtrack {_esc(__version__)} (occtrack report'
                 f'{" " + _esc(source) if source else ""}); one file, no network access.'
                 f"</footer>")
@@ -725,5 +755,45 @@ def build_page(report: dict, source: str = "", title: str | None = None,
             f"<title>{_esc(title)}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<main>\n"
             + "\n".join(body)
             + "\n</main>\n"
-            f'<script type="application/json" id="occtrack-data">{_embedded(report)}</script>\n'
+            f'<script type="application/json" id="occtrack-data">{_embedded(views)}</script>\n'
             f"<script>{SCRIPT}</script>\n</body>\n</html>\n")
+
+
+def _view_body(report: dict, cls: str, colors: dict[str, str], show: str | None,
+               start: int) -> tuple[list[str], int]:
+    """The page's part for one view (all of a MOTChallenge report, one class of a KITTI
+    one): the navigation, the combined and mean tables, then a section a sequence, numbered
+    from `start`; and the next sequence number."""
+    sequences = list(report["sequences"].items())
+    count = len(sequences)
+    pooled_over = report.get("combined_over", count)  # KITTI: sequences without the class too
+    prefix = f"{cls}-" if cls else ""
+    label = f"{cls}: " if cls else ""
+    nav = " ".join(f'<a href="#{prefix}{_anchor(start + i)}">{_esc(name)}</a>'
+                   for i, (name, _) in enumerate(sequences))
+    combined = report["combined"]
+    mean = report["mean"]
+    mean_columns = [c for c in COLUMNS if c[0] in MEAN_KEYS]
+    body = ([f'<h2 class="class">{_esc(cls)}</h2>'] if cls else []) + [
+        f"<nav>{_esc(label)}Sequences: {nav} <a href=\"#{prefix}combined\">combined</a></nav>",
+        f'<section id="{prefix}combined">',
+        f"<h2>{_esc(label)}Combined over {pooled_over} sequence"
+        f"{'s' if pooled_over != 1 else ''}</h2>",
+        f'<p class="meta">{_esc(combined.get("method", ""))}.</p>',
+        _table(combined["trackers"], colors, table_id=f"{prefix}combined-table"),
+        _reliability_diagram(combined.get("calibration"), colors, _DIAGRAM_TITLE
+                             + f" (the boxes of all {pooled_over} pooled)"),
+        f"<h2>{_esc(label)}Mean over {count} sequence{'s' if count != 1 else ''}</h2>",
+        f'<p class="meta">{_esc(mean.get("method", ""))}.</p>',
+        _table(mean["trackers"], colors, mean_columns, table_id=f"{prefix}mean-table"),
+        "</section>",
+    ]
+    for i, (name, entry) in enumerate(sequences):
+        body += [f'<section id="{prefix}{_anchor(start + i)}">',
+                 f"<h2>{_esc(label)}{_esc(_sequence_title(name, entry))}</h2>",
+                 _table(entry["trackers"], colors),
+                 _reliability_diagram(entry.get("calibration"), colors, _DIAGRAM_TITLE)]
+        if not cls:  # a KITTI run keeps no per-frame data or boxes
+            body += [_plots(entry, colors, start + i), _viewer(entry, start + i, show)]
+        body.append("</section>")
+    return body, start + count
