@@ -134,7 +134,13 @@ def run(args: argparse.Namespace) -> int:
     classes = _kitti_options(args, kitti)
     if args.json is not None:
         inputs = [args.root]
-        if not kitti:
+        if kitti:
+            from pathlib import Path
+
+            root = Path(args.root)
+            inputs += [*root.glob("evaluate_tracking.seqmap*"), *root.glob("label_02/*"),
+                       *root.glob("det_02/*/*"), *root.glob("seqinfo/*")]
+        else:
             for folder in benchmark.find_sequences(args.root):
                 inputs += [folder / "seqinfo.ini", folder / "det" / "det.txt",
                            folder / "gt" / "gt.txt"]
