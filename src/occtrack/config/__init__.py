@@ -82,7 +82,11 @@ class TrackerConfig:
 
     position_noise: float = 0.066  # process noise of box centres, h / sqrt(s)
     velocity_noise: float = 0.5  # of velocities, h / s / sqrt(s)
-    size_noise: float = 0.044  # of half-sizes, h / sqrt(s)
+    size_noise: float = 0.044  # of half-sizes, h / sqrt(s); with learn_size_noise the prior
+    # of the value learnt from the sizes of the detections the tracks take (a car the camera
+    # drives up to grows by tens of percent a second, a pedestrian beside a camera hardly
+    # changes size: models.motion.SizeNoiseLearner)
+    learn_size_noise: bool = True
     velocity_time: float = math.inf  # s: velocities relax to 0 with this time constant
     # (models.motion); inf: constant velocity, the paper's model
     coast_velocity_time: float = 0.1  # s: the same, for an object missed at its last update

@@ -33,6 +33,7 @@ from occtrack.config import TrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.io.mot import MotTable
 from occtrack.models.box import edges_from_ltwh
+from occtrack.models.motion import SizeNoiseLearner
 from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.occlusion.boxes import box_occlusion
@@ -51,6 +52,7 @@ from occtrack.tracker.boxes import (
 )
 from occtrack.tracker.camera import estimate_camera
 from occtrack.tracker.confidence import report_confidence
+from occtrack.tracker.sizes import SizeHistory
 
 CAMERA_MEMORY = 1.0
 """s: the time constant of the camera's remembered speed (`Tracker.step`)."""
@@ -189,6 +191,7 @@ class Tracker:
         self._timestamp: float | None = None
         self._camera_power = np.zeros(2)
         self._expansion_power = 0.0  # 1 / (px s)^2: the camera's recent squared expansion rate
+        self._sizes = SizeHistory(SizeNoiseLearner(c.size_noise))
 
     def update(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
                classes: npt.ArrayLike | None = None, timestamp: float | None = None,
@@ -276,7 +279,13 @@ class Tracker:
             camera = (np.diag(affine[:, :2]).copy(), affine[:, 2].copy())
         elif self.config.camera_motion == "detections":
             camera = self._camera_motion(boxes, self.config.dt if dt is None else dt)
-        self.filter.step(edges_from_ltwh(boxes), scores, camera, dt=dt, classes=labels)
+        edges = edges_from_ltwh(boxes)
+        self.filter.step(edges, scores, camera, dt=dt, classes=labels)
+        if self.config.learn_size_noise:
+            f = self.filter
+            self._sizes.record(f.slot_serial, f.slot_detection, boxes,
+                               f.measurement.observed(edges))
+            f.size_noise = self._sizes.learner.noise(f.dt)
         self._boxes = boxes
         return self.tracks()
 

@@ -185,6 +185,9 @@ class GaussianMixturePMB:
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
         self._dt_models: dict[float, tuple] = {}
+        # the half-size process noise the prediction uses (h / sqrt(s)): the config's, or what
+        # the tracker learnt (`models.motion.SizeNoiseLearner`)
+        self.size_noise = c.size_noise
         self._use_dt(c.dt)
         self.births = EdgeBirths(c.image_size, c.inward_speed, c.birth_speed_std)
         # the survival region: components whose centre leaves it take exit_survival
@@ -345,9 +348,13 @@ class GaussianMixturePMB:
         n = self.n
         if n == 0:
             return
+        Q, coast_Q = self.motion.Q, self.coast_motion.Q
+        if self.size_noise != self.config.size_noise:
+            Q, coast_Q = Q.copy(), coast_Q.copy()
+            Q[2, 2] = coast_Q[2, 2] = self.size_noise**2 * self.dt
         _predict_pool(self.mass[:n], self.mean[:n], self.cov[:n], self.det[:n], self.occ[:n],
-                      self.coast[:n], 0.5 * self.dt, self.motion.F, self.motion.Q,
-                      self.coast_motion.F, self.coast_motion.Q,
+                      self.coast[:n], 0.5 * self.dt, self.motion.F, Q, self.coast_motion.F,
+                      coast_Q,
                       self.detectability.stationary, self._memories[0],
                       self.occludability.stationary, self._memories[1], self.image_size,
                       self.survival_inside, self.config.exit_survival)
