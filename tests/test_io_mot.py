@@ -144,8 +144,6 @@ def detections(tmp_path, text, **kwargs):
 @pytest.mark.parametrize("row,message", [
     ("1,-1,10,10,0,50,0.9", "box size 0 x 50: width and height must be positive; pass --lenient"),
     ("1,-1,10,10,-4,50,0.9", "box size -4 x 50"),
-    ("1,-1,700,10,20,50,0.9", "lies wholly outside the 640x480 image"),
-    ("1,-1,-30,10,20,50,0.9", "lies wholly outside"),
     ("1,-1,10,10,20,50,57", "score 57 is outside [0, 1] (this file's scores run from 0.5 to 57); "
                             "pass --score-range LO,HI"),
     ("1,-1,10,10,20,50,-3", "score -3 is outside [0, 1]"),
@@ -161,9 +159,22 @@ def test_lenient_skips_and_clips_with_one_warning(tmp_path):
             "2,-1,900,1,20,50,0.5\n3,-1,1,1,20,50,-0.2\n")
     table, warning = detections(tmp_path, text, lenient=True)
     assert table.line.tolist() == [1, 3, 5] and table.score.tolist() == [0.5, 1.0, 0.0]
-    assert warning == (f"{tmp_path / 'f.txt'}: skipped 2 rows with a zero or negative size or "
-                       f"wholly outside the 640x480 image (first at line 2); clipped 2 scores "
-                       f"to [0, 1] (first at line 3)")
+    assert warning == (f"{tmp_path / 'f.txt'}: skipped 1 boxes wholly outside the 640x480 image "
+                       f"(first at line 4; check the image size if that is many); skipped 1 rows "
+                       f"with a zero or negative size (first at line 2); clipped 2 scores to "
+                       f"[0, 1] (first at line 3)")
+
+
+@pytest.mark.parametrize("row", ["1,-1,700,10,20,50,0.9", "1,-1,-30,10,20,50,0.9",
+                                 "1,-1,10,480,20,50,0.9", "1,-1,10,-50,20,50,0.9"])
+def test_boxes_wholly_outside_the_image_are_skipped_with_a_count(tmp_path, row):
+    """Real detectors report boxes beyond the border: skipped and counted, never a stop; a box
+    partly outside is kept."""
+    text = f"1,-1,1,1,20,50,0.5\n{row}\n2,-1,630,470,20,50,0.5\n{row}\n"
+    table, warning = detections(tmp_path, text)
+    assert table.line.tolist() == [1, 3]
+    assert warning == (f"{tmp_path / 'f.txt'}: skipped 2 boxes wholly outside the 640x480 "
+                       f"image (first at line 2; check the image size if that is many)")
     assert detections(tmp_path, "1,-1,1,1,20,50,0.5\n", lenient=True)[1] is None
 
 
@@ -283,6 +294,10 @@ def test_a_box_needs_a_positive_size_and_some_area_inside_the_image(tmp_path, bo
     assert (len(table) == 1) == kept and (warning is None) == kept
     if kept:
         assert detections(tmp_path, row)[0].box.tolist() == [list(box)]
+    elif box[2] > 0 and box[3] > 0:  # wholly outside: skipped with a count, lenient or not
+        table, strict_warning = detections(tmp_path, row)
+        assert len(table) == 0 and strict_warning == warning
+        assert "skipped 1 boxes wholly outside" in warning
     else:
         with pytest.raises(OcctrackError, match="f.txt:1: box "):
             detections(tmp_path, row)

@@ -39,13 +39,14 @@ they hold for any camera once the frame rate is known. Every frame is tracked
 (--frame-step N tracks every N-th, as the paper did with 2; the frames between are reported
 with the tracks carried along their velocities).
 
-Rows are checked, not altered in silence: a box of zero or negative size, a box wholly outside
-the image and a score outside [0, 1] stop the run with the file and line. A detector whose
-scores are not probabilities (MOT17's DPM, for one) takes --score-range LO,HI, which maps LO..HI
-linearly onto 0..1; --lenient skips such boxes and clips such scores, with one warning giving
-the counts and the first line. More than --max-gap-frames empty frames in a row (default: a
-day at the frame rate) is an error too, so a stray frame number cannot make the tracker step
-through billions of empty frames.
+Rows are checked, not altered in silence: a box of zero or negative size and a score outside
+[0, 1] stop the run with the file and line. A detector whose scores are not probabilities
+(MOT17's DPM, for one) takes --score-range LO,HI, which maps LO..HI linearly onto 0..1;
+--lenient skips such boxes and clips such scores, with one warning giving the counts and the
+first line. A box partly outside the image is tracked; one wholly outside it (real detectors
+report them) is skipped, with a warning giving the count and the first line. More than
+--max-gap-frames empty frames in a row (default: a day at the frame rate) is an error too, so a
+stray frame number cannot make the tracker step through billions of empty frames.
 
 KITTI: a KITTI tracking file (space separated, frame id type truncated occluded alpha x1 y1
 x2 y2 h w l x y z rotation_y [score], frames 0-based; a file without the 18th column has score
@@ -114,7 +115,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--score-range", type=score_range, metavar="LO,HI",
                         help="map the detector's raw scores LO..HI linearly onto 0..1")
     parser.add_argument("--lenient", action="store_true",
-                        help="skip boxes of zero size or wholly outside the image and clip "
+                        help="skip boxes of zero or negative size and clip "
                              "scores to [0, 1], with one warning, instead of stopping")
     parser.add_argument("--max-gap-frames", type=whole_number(0), metavar="N",
                         help="most empty frames allowed in a row (default: a day at the "

@@ -172,10 +172,11 @@ def read_detections(path: str | os.PathLike, image_size: tuple[float, float], *,
                     num_frames: int | None = None) -> tuple[MotTable, str | None]:
     """A detection file to track, and a warning (None if there is nothing to say).
 
-    A row with a zero or negative size, a box wholly outside the image, or a score outside
-    [0, 1] (after `score_range` (lo, hi) maps lo..hi linearly onto 0..1) is an error naming
-    its line, unless `lenient`: then such boxes are skipped and such scores clipped, and the
-    warning gives the counts and the first line of each."""
+    A box wholly outside the image is real detector output (a detector run on a padded or
+    resized frame reports them): it is skipped, and the warning gives the count and the first
+    line. A row with a zero or negative size, or a score outside [0, 1] (after `score_range`
+    (lo, hi) maps lo..hi linearly onto 0..1), is an error naming its line, unless `lenient`:
+    then such boxes are skipped and such scores clipped, with their counts in the warning."""
     return check_detections(_read(str(path), "det"), image_size, score_range=score_range,
                             lenient=lenient, max_gap_frames=max_gap_frames,
                             num_frames=num_frames)
@@ -196,16 +197,12 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
         score = (score - low) / (high - low)
     off = (score < 0) | (score > 1)
     size = f"{width:g}x{height:g}"
-    if not lenient and (bad_size | outside | off).any():
-        i = int(np.argmax(bad_size | outside | off))
+    if not lenient and (bad_size | off).any():
+        i = int(np.argmax(bad_size | off))
         l_, t_, w_, h_ = table.box[i]
         if bad_size[i]:
             problem = (f"box size {w_:g} x {h_:g}: width and height must be positive; pass "
                        f"--lenient to skip such rows")
-        elif outside[i]:
-            problem = (f"box at ({l_:g}, {t_:g}) of size {w_:g} x {h_:g} lies wholly outside "
-                       f"the {size} image; check the image size, or pass --lenient to skip "
-                       f"such rows")
         elif score_range is None:
             problem = (f"score {table.score[i]:g} is outside [0, 1] (this file's scores run "
                        f"from {table.score.min():g} to {table.score.max():g}); pass "
@@ -219,9 +216,13 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
 
     notes = []
     skip = bad_size | outside
-    if skip.any():
-        notes.append(f"skipped {int(skip.sum())} rows with a zero or negative size or wholly "
-                     f"outside the {size} image (first at line {table.line[skip][0]})")
+    if outside.any():
+        notes.append(f"skipped {int(outside.sum())} boxes wholly outside the {size} image "
+                     f"(first at line {table.line[outside][0]}; check the image size if "
+                     f"that is many)")
+    if bad_size.any():
+        notes.append(f"skipped {int(bad_size.sum())} rows with a zero or negative size "
+                     f"(first at line {table.line[bad_size][0]})")
     clipped = off & ~skip
     if clipped.any():
         notes.append(f"clipped {int(clipped.sum())} scores to [0, 1] (first at line "
