@@ -285,7 +285,8 @@ class Tracker:
             f = self.filter
             self._sizes.record(f.slot_serial, f.slot_detection, boxes,
                                f.measurement.observed(edges))
-            f.size_noise = self._sizes.learner.noise(f.dt)
+            # (the differences span tracked frames of the nominal step, whatever this step's)
+            f.size_noise = self._sizes.learner.noise(self.config.dt)
         self._boxes = boxes
         return self.tracks()
 
