@@ -106,6 +106,9 @@ class TrackerConfig:
     clutter_rate: float = 5.0
     clutter_score_power: float = 2.0
     score_floor: float = 0.05  # scores are clipped to [score_floor, 1] first
+    # learn the score term's shape from the detector at hand (score^-power the prior; the
+    # level at the top scores kept: models.score_model.ScoreLearner)
+    learn_score_model: bool = True
 
     edge_birth_rate: float = 6.94  # expected new objects per second per image edge
     spread_birth_rate: float = 1.0  # per second, anywhere in the image

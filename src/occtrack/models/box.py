@@ -100,6 +100,8 @@ class BoxMeasurement:
         self.clutter_score_power = float(clutter_score_power)
         self.edge_noise = float(edge_noise)
         self.border_margin = float(border_margin)
+        # a learnt score term (`models.score_model.ScoreLearner`) in place of score^-power
+        self.score_model = None
         self.aspect = aspect
         W, H = self.image_size
         self._border = np.array([[self.border_margin, W - self.border_margin],
@@ -134,9 +136,11 @@ class BoxMeasurement:
         (`config.TrackerConfig`): a false box falls anywhere in the image with a scale-free
         size; scores are clipped to [score_floor, 1] first."""
         W, H = self.image_size
-        # (numpy's power, not libm's: they differ in the last bit)
-        score_term = _clip(np.ascontiguousarray(scores, dtype=float), self.score_floor,
-                           1.0) ** (-self.clutter_score_power)
+        if self.score_model is not None:
+            score_term = np.ascontiguousarray(self.score_model.score_term(scores), dtype=float)
+        else:  # (numpy's power, not libm's: they differ in the last bit)
+            score_term = _clip(np.ascontiguousarray(scores, dtype=float), self.score_floor,
+                               1.0) ** (-self.clutter_score_power)
         return _box_clutter(z, score_term, self.clutter_rate, W * H)
 
     @staticmethod

@@ -111,6 +111,11 @@ class SizeNoiseLearner:
         ring[:n - first] = diffs[first:]
         self._count[lag] += n
 
+    @property
+    def full(self) -> bool:
+        """Whether both lags' buffers hold `memory` differences."""
+        return min(self._count.values()) >= self.memory
+
     def noise(self, dt: float) -> float:
         """q in box heights per square-root second: the prior, raised by the estimate."""
         n = min(self._count[1], self._count[self.lag], self.memory)

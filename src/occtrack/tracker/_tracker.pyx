@@ -6,6 +6,7 @@
   `_estimate_dense`, `_candidates`, `_mutual_shifts`, `_mode_shift`, `_votes`, ...);
 * `_confidence.pxi`: confidence.py's confidence of a reported box (`box_covariances`,
   `_report_confidence`, `_overlap_probability`, ...);
+* `_sizes.pxi`: sizes.py's bookkeeping of the sizes the tracks take (`_record_sizes`);
 * `_tracker_rows.pxi`: tracker.py's reporting rule and rows (`_reported`, `_report_rows`).
 
 The maths and the calls are in those modules, which import the kernels from here under the
@@ -52,4 +53,5 @@ cnp.import_array()
 include "_boxes.pxi"
 include "_camera.pxi"
 include "_confidence.pxi"
+include "_sizes.pxi"
 include "_tracker_rows.pxi"

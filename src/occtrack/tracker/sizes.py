@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from occtrack.models.motion import SizeNoiseLearner
+from occtrack.tracker._tracker import _record_sizes
 
 
 class SizeHistory:
@@ -45,31 +46,18 @@ class SizeHistory:
                observed: np.ndarray) -> None:
         """One tracked frame: `serial` (L,) each slot's Bernoulli, `took` (L,) the detection
         it took (-1: none), `boxes` (M, 4) left, top, width, height, `observed` (M, 2, 2)
-        which of their edges were measured."""
+        which of their edges were measured. (The loop over slots is compiled:
+        `_record_sizes`.)"""
         self._grow(len(serial))
-        t, d = self.step, self.depth
+        t = self.step
         self.step += 1
-        slots = np.flatnonzero(took >= 0)
-        if not len(slots):
+        if not (took >= 0).any():
             return
-        fresh = self.serial[slots] != serial[slots]
-        self.when[slots[fresh]] = -1
-        self.serial[slots] = serial[slots]
-        j = took[slots]
-        half = boxes[j, 2:] / 2.0
-        height = np.maximum(boxes[j, 3], 1e-9)
-        valid = observed[j].all(axis=2)  # both edges of the axis measured
-        for lag in (1, self.learner.lag):
-            idx = (t - lag) % d
-            back = self.when[slots, idx] == t - lag
-            if back.any():
-                s = slots[back]
-                both = valid[back] & self.valid[s, idx]
-                mean_h = (height[back] + self.height[s, idx]) / 2.0
-                change = (half[back] - self.half[s, idx]) / mean_h[:, None]
-                self.learner.add(lag, change[both])
-        idx = t % d
-        self.when[slots, idx] = t
-        self.half[slots, idx] = half
-        self.height[slots, idx] = height
-        self.valid[slots, idx] = valid
+        first, later = _record_sizes(
+            self.serial, self.when, self.half, self.height, self.valid,
+            np.ascontiguousarray(serial, dtype=np.int64),
+            np.ascontiguousarray(took, dtype=np.int64),
+            np.ascontiguousarray(boxes, dtype=float),
+            np.ascontiguousarray(observed, dtype=bool), t, self.learner.lag)
+        self.learner.add(1, first)
+        self.learner.add(self.learner.lag, later)

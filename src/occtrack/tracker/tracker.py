@@ -34,6 +34,7 @@ from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.io.mot import MotTable
 from occtrack.models.box import edges_from_ltwh
 from occtrack.models.motion import SizeNoiseLearner
+from occtrack.models.score_model import ScoreLearner
 from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
 from occtrack.occlusion.boxes import box_occlusion
@@ -153,6 +154,9 @@ class TrackResult:
         return len(np.unique(self.id))
 
 
+REFRESH_NOISE = 10  # tracked frames between renewals of the learnt size noise
+
+
 class Tracker:
     """Gaussian-mixture PMB box tracker.
 
@@ -192,6 +196,9 @@ class Tracker:
         self._camera_power = np.zeros(2)
         self._expansion_power = 0.0  # 1 / (px s)^2: the camera's recent squared expansion rate
         self._sizes = SizeHistory(SizeNoiseLearner(c.size_noise))
+        self._scores = ScoreLearner(c.score_floor, c.clutter_score_power)
+        if c.learn_score_model:
+            self.filter.measurement.score_model = self._scores
 
     def update(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
                classes: npt.ArrayLike | None = None, timestamp: float | None = None,
@@ -281,12 +288,19 @@ class Tracker:
             camera = self._camera_motion(boxes, self.config.dt if dt is None else dt)
         edges = edges_from_ltwh(boxes)
         self.filter.step(edges, scores, camera, dt=dt, classes=labels)
+        if self.config.learn_score_model:
+            self._scores.update(scores, self.filter.clutter_probability, self.filter.dt)
         if self.config.learn_size_noise:
             f = self.filter
             self._sizes.record(f.slot_serial, f.slot_detection, boxes,
                                f.measurement.observed(edges))
-            # (the differences span tracked frames of the nominal step, whatever this step's)
-            f.size_noise = self._sizes.learner.noise(self.config.dt)
+            # (the differences span tracked frames of the nominal step, whatever this step's;
+            # once the learner holds its full memory, a few frames' new differences barely
+            # move the medians of thousands, and the estimate is renewed every REFRESH_NOISE
+            # tracked frames; until then every frame)
+            learner = self._sizes.learner
+            if not learner.full or self._sizes.step % REFRESH_NOISE == 1:
+                f.size_noise = learner.noise(self.config.dt)
         self._boxes = boxes
         return self.tracks()
 

@@ -219,6 +219,7 @@ class GaussianMixturePMB:
         self._next_serial = 0
         self.steps = 0
         self.iterations = 0  # loopy BP iterations of the last step
+        self.clutter_probability = np.zeros(0)  # of each detection of the last step
         # running sums of detected half-sizes (count, sum, sum of squares) for the birth prior
         self._size_stats = np.zeros((3, 2))
         self._size_settings = tuple(np.zeros(0) if value is None else
@@ -449,6 +450,11 @@ class GaussianMixturePMB:
         marg = lbp_sparse(s_row, s_col, s_L, miss_obj, w_new, tol=c.lbp_tolerance,
                           max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
+        # pi_j, the probability that detection j is clutter: new, and of its new weight the
+        # clutter's share (what a learnt detector model counts: models.score_model)
+        share = clutter * (1.0 - c.occludability * seen_hidden)
+        self.clutter_probability = np.divide(marg.p_new * share, w_new,
+                                             out=np.zeros(M), where=w_new > 0)
         self._count_detections(slots, s_row, s_col, marg.p_hit)
 
         # children: one miss child per component, then one hit child per pair
