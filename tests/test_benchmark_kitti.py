@@ -412,3 +412,38 @@ def test_two_runs_give_the_same_json(run, layout, tmp_path):
     _, first, _ = run
     second = bench(layout, tmp_path / "again.json")
     assert without_times(second) == without_times(first)  # the run times may differ
+
+
+def test_config_settings_reach_occtrack_and_match_track_with_the_same_config(layout, tmp_path,
+                                                                             capsys):
+    """--config FILE: the settings reach occtrack's models (the JSON keeps them, and the
+    scores are those of `occtrack track --config FILE` then eval), the image size, frame rate
+    and occlusion model in the file are the sequence's and the model's; a bad setting is one
+    line before any run."""
+    config = tmp_path / "c.toml"
+    config.write_text("learn_size_noise = false\nlearn_score_model = false\nfps = 99\n"
+                      "occlusion = \"none\"\n")
+    report = bench(layout, tmp_path / "k.json", "--config", str(config),
+                   trackers=("object-wise",))
+    assert report["settings"] == {"learn_size_noise": False, "learn_score_model": False}
+    result = tmp_path / "r.txt"
+    assert main(["track", str(layout / "det_02" / "rrc" / "0000.txt"), "-o", str(result),
+                 "--config", str(config), "--occlusion", "object-wise", "--fps", "10",
+                 "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["eval", str(layout / "label_02" / "0000.txt"), str(result), "--json"]) == 0
+    scored = json.loads(capsys.readouterr().out)
+    for cls in CLASSES:
+        ours = report["sequences"]["0000"]["classes"][cls]["trackers"]["object-wise"]
+        theirs = scored["classes"][cls]["sequences"]["0000"]
+        for key in HEADLINE:
+            assert ours[key] == theirs[key], (cls, key)
+    default = bench(layout, tmp_path / "d.json", trackers=("object-wise",))
+    assert "settings" not in default
+    car = "car"
+    assert (default["sequences"]["0000"]["classes"][car]["trackers"]["object-wise"]
+            != report["sequences"]["0000"]["classes"][car]["trackers"]["object-wise"])
+    config.write_text("learn_size_noise = 3\n")
+    message = error_of(capsys, "benchmark", str(layout), "--sequential", "--config",
+                       str(config), "--trackers", "none")
+    assert message.startswith(str(config)) and "learn_size_noise" in message

@@ -79,6 +79,10 @@ frame rate is seqinfo's. The JSON is
 and occtrack report draws it (tables and calibration; --per-frame and --keep-boxes are
 MOTChallenge's only).
 
+--config FILE takes a TOML file of TrackerConfig settings for occtrack's models (the JSON then
+holds them under "settings"): e.g. learn_size_noise = false to see what the learnt size noise
+buys.
+
 examples:
   occtrack benchmark $OCCTRACK_DATA
   occtrack benchmark ../shared/data/kitti --json kitti.json --quiet
@@ -98,6 +102,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "extra: occluboost, boxmot-botsort, boosttrack, "
                              "boxmot-bytetrack, boxmot-ocsort, sfsort, hybridsort, "
                              "deepocsort")
+    parser.add_argument("--config", metavar="FILE",
+                        help="TOML file of TrackerConfig settings for occtrack's models (as "
+                             "occtrack track --config takes; the image size, frame rate and "
+                             "occlusion model stay the sequence's and the model's)")
     parser.add_argument("--layout", choices=("auto", "mot", "kitti"), default="auto",
                         help="the folder's layout (default auto: kitti when DIR holds "
                              "label_02/ and det_02/, else MOTChallenge sequence folders)")
@@ -163,14 +171,17 @@ def run(args: argparse.Namespace) -> int:
             print("occtrack benchmark: note: Dask is not installed (pip install "
                   "\"occtrack[sweep]\"): the runs go one by one in this process",
                   file=sys.stderr)
+    settings = _settings(args.config)
     start = time.perf_counter()
     if kitti:
         report = benchmark_kitti.benchmark(args.root, trackers, args.detections, classes,
-                                           quiet=args.quiet, engine=engine)
+                                           quiet=args.quiet, engine=engine, settings=settings)
     else:
         report = benchmark.benchmark(args.root, trackers, quiet=args.quiet,
                                      per_frame=args.per_frame, keep_boxes=args.keep_boxes,
-                                     engine=engine)
+                                     engine=engine, settings=settings)
+    if settings:
+        report["settings"] = settings
     seconds = time.perf_counter() - start
 
     text = benchmark.to_json(report)
@@ -216,3 +227,17 @@ def _kitti_options(args: argparse.Namespace, kitti: bool) -> tuple[str, ...]:
         raise OcctrackError(f"--classes: KITTI's evaluation scores car and pedestrian, not "
                             f"{odd[0] if odd else 'nothing'!r}")
     return classes
+
+
+def _settings(path: str | None) -> dict:
+    """The --config file's settings, checked (every name and value a TrackerConfig takes)
+    before any run."""
+    if path is None:
+        return {}
+    from occtrack.tracker import TrackerConfig
+    from occtrack.tracker.config import load_toml
+
+    values = {k: v for k, v in load_toml(path).items()
+              if k not in ("image_size", "fps", "occlusion")}
+    TrackerConfig.from_dict(values, path)
+    return values

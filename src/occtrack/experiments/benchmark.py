@@ -147,17 +147,19 @@ def cached_sequence(folder: str | os.PathLike) -> Sequence:
     return _SEQUENCES[str(path)][1]
 
 
-def track(name: str, seq: Sequence) -> MotTable:
-    """Run one tracker, occtrack (by occlusion model) or a peer, on a whole sequence."""
-    return track_with_states(name, seq)[0]
+def track(name: str, seq: Sequence, settings: dict | None = None) -> MotTable:
+    """Run one tracker, occtrack (by occlusion model, with `settings`: TrackerConfig values
+    over the defaults) or a peer, on a whole sequence."""
+    return track_with_states(name, seq, settings)[0]
 
 
-def track_with_states(name: str, seq: Sequence) -> tuple[MotTable, np.ndarray | None]:
+def track_with_states(name: str, seq: Sequence, settings: dict | None = None
+                      ) -> tuple[MotTable, np.ndarray | None]:
     """`track`, and for occtrack the state of each result row (DETECTED, COASTING: reported
     without a detection, OCCLUDED: coasting and its miss put down to occlusion); None for a
     peer."""
     if name in MODELS:
-        config = TrackerConfig.from_dict({"occlusion": name,
+        config = TrackerConfig.from_dict({**(settings or {}), "occlusion": name,
                                           "image_size": (seq.width, seq.height),
                                           "fps": seq.fps})
         out = Tracker(config).run(seq.det, seq.length)
@@ -219,6 +221,7 @@ class Job:
     tracker: str
     per_frame: bool = False
     keep_boxes: bool = False
+    settings: tuple = ()  # (name, value) pairs of TrackerConfig settings for occtrack's models
 
 
 def run_job(job: Job) -> dict:
@@ -227,7 +230,7 @@ def run_job(job: Job) -> dict:
     seq = cached_sequence(job.folder)
     peers.load_for(job.tracker)
     start = time.perf_counter()
-    result, states = track_with_states(job.tracker, seq)
+    result, states = track_with_states(job.tracker, seq, dict(job.settings))
     spent = time.perf_counter() - start
     scored = scored_frames(seq.gt, result, PROTOCOL, seq.length)
     results = sequence_results(scored.trackeval)
@@ -260,13 +263,15 @@ def _run_jobs(jobs: list[Job], engine):
 
 
 def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
-              per_frame: bool = False, keep_boxes: bool = False, engine=None) -> dict:
+              per_frame: bool = False, keep_boxes: bool = False, engine=None,
+              settings: dict | None = None) -> dict:
     """Track and score every sequence under `root` with every tracker named; the report that
     `--json` writes (see `occtrack benchmark --help` for its shape). `per_frame` adds each
     sequence's "per_frame" counts, `keep_boxes` its "boxes" (and the counts). `engine`: a
     `occtrack.experiments.sweep.DaskEngine` to run the (sequence, tracker) tasks on (started
     here after the inputs are checked, unless the caller started it), or None for this
-    process."""
+    process. `settings`: TrackerConfig values over the defaults for occtrack's models (the
+    image size, frame rate and occlusion model are the sequence's and the model's)."""
     per_frame = per_frame or keep_boxes
     folders = find_sequences(root)
     sequences = [load_sequence(folder) for folder in folders]
@@ -275,8 +280,10 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
         raise OcctrackError("two sequence folders share a name in seqinfo.ini", str(root))
     for name in trackers:
         peers.load_for(name)
-    jobs = [Job(str(seq.folder.resolve()), name, per_frame, keep_boxes) for seq in sequences
-            for name in trackers]
+    pairs = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)  # (hashable)
+                         for k, v in (settings or {}).items()))
+    jobs = [Job(str(seq.folder.resolve()), name, per_frame, keep_boxes, pairs)
+            for seq in sequences for name in trackers]
     done: dict[Job, dict] = {}
     failed: list[str] = []
     with contextlib.ExitStack() as stack:

@@ -157,13 +157,15 @@ def result_table(frame, ids, types, ltwh, score, image_size=None) -> KittiTable:
                       path=f"<{n} result rows>")
 
 
-def track(name: str, seq: Sequence, classes: tuple[str, ...]) -> KittiTable:
-    """One tracker on a sequence's boxes of `classes`: occtrack (by occlusion model) on all of
-    them at once, a peer class by class."""
+def track(name: str, seq: Sequence, classes: tuple[str, ...],
+          settings: dict | None = None) -> KittiTable:
+    """One tracker on a sequence's boxes of `classes`: occtrack (by occlusion model, with
+    `settings` over the defaults) on all of them at once, a peer class by class."""
     types = [CLASS_TYPE[c] for c in classes]
     det = seq.det.select(np.isin(seq.det.cls, types))
     if name in MODELS:
-        config = TrackerConfig.from_dict({"occlusion": name, "fps": seq.fps,
+        config = TrackerConfig.from_dict({**(settings or {}), "occlusion": name,
+                                          "fps": seq.fps,
                                           "image_size": (seq.width, seq.height)})
         out = Tracker(config).run(det, seq.length, classes=True)
         return result_table(out.frame, out.id, out.classes, out.box, out.confidence,
@@ -188,6 +190,7 @@ class Job:
     sequence: str
     tracker: str
     classes: tuple[str, ...] = CLASSES
+    settings: tuple = ()  # (name, value) pairs of TrackerConfig settings for occtrack's models
 
 
 def run_job(job: Job) -> dict:
@@ -196,7 +199,7 @@ def run_job(job: Job) -> dict:
     seq = cached_sequence(job.root, job.detections, job.sequence)
     peers.load_for(job.tracker)
     start = time.perf_counter()
-    result = track(job.tracker, seq, job.classes)
+    result = track(job.tracker, seq, job.classes, dict(job.settings))
     spent = time.perf_counter() - start
     out = {"seconds": spent, "classes": {}}
     for cls, scored in scored_frames(seq.gt, result, seq.length, job.classes).items():
@@ -224,9 +227,11 @@ def _run_jobs(jobs: list[Job], engine):
 
 
 def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | None = None,
-              classes: tuple[str, ...] = CLASSES, quiet: bool = False, engine=None) -> dict:
+              classes: tuple[str, ...] = CLASSES, quiet: bool = False, engine=None,
+              settings: dict | None = None) -> dict:
     """Track and score every sequence of a KITTI folder with every tracker; the report that
-    `occtrack benchmark --json` writes for a KITTI folder."""
+    `occtrack benchmark --json` writes for a KITTI folder. `settings`: TrackerConfig values
+    over the defaults for occtrack's models."""
     base = Path(root).resolve()
     if not is_layout(base):
         raise OcctrackError("not a KITTI tracking folder: it needs label_02/ and det_02/",
@@ -236,8 +241,13 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
     sequences = [load_sequence(base, detections, name) for name in names]  # checked up front
     for name in trackers:
         peers.load_for(name)
-    jobs = [Job(str(base), detections, seq.name, name, tuple(classes)) for seq in sequences
-            for name in trackers]
+    pairs = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)  # (hashable)
+                         for k, v in (settings or {}).items()))
+
+    def job_of(sequence: str, tracker: str) -> Job:
+        return Job(str(base), detections, sequence, tracker, tuple(classes), pairs)
+
+    jobs = [job_of(seq.name, name) for seq in sequences for name in trackers]
     done: dict[Job, dict] = {}
     failed: list[str] = []
     with contextlib.ExitStack() as stack:
@@ -264,8 +274,7 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
     for seq in sequences:
         report["sequences"][seq.name] = {
             "frames": seq.length, "fps": seq.fps, "image_size": [seq.width, seq.height],
-            "classes": {cls: {"truth": done[Job(str(base), detections, seq.name, trackers[0],
-                                                 tuple(classes))]["classes"][cls]["truth"],
+            "classes": {cls: {"truth": done[job_of(seq.name, trackers[0])]["classes"][cls]["truth"],
                               "trackers": {}, "calibration": {}} for cls in classes}}
     frames = sum(seq.length for seq in sequences)
     for cls in classes:
@@ -273,8 +282,7 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
                                                                   "calibration": {}})
         mean = report["mean"]["classes"].setdefault(cls, {"trackers": {}})
         for name in trackers:
-            outs = [done[Job(str(base), detections, seq.name, name, tuple(classes))]
-                    for seq in sequences]
+            outs = [done[job_of(seq.name, name)] for seq in sequences]
             per_seq = []
             for seq, out in zip(sequences, outs, strict=True):
                 part = out["classes"][cls]
