@@ -195,11 +195,11 @@ def test_failed_run_is_named_and_the_others_finish(tmp_path, capsys, monkeypatch
     ran = []
     real = benchmark.track_with_states
 
-    def track(name, seq):
+    def track(name, seq, settings=None):
         ran.append((name, seq.name))
         if seq.name == "BAD" and name == "none":
             raise FloatingPointError("made to fail")
-        return real(name, seq)
+        return real(name, seq, settings)
 
     monkeypatch.setattr(benchmark, "track_with_states", track)
     assert main(["benchmark", str(tmp_path), "--trackers", "none,object-wise",
