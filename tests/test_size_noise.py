@@ -414,3 +414,54 @@ def test_learnt_noise_per_sqrt_second_does_not_depend_on_the_step_length():
     assert before > 2 * 0.044
     tracker.step(frames[21], dt=0.2)
     assert tracker.filter.size_noise == pytest.approx(before, rel=0.1)
+
+
+def test_camera_expansion_moves_boxes_away_from_the_centre():
+    """camera_expansion: a camera driving forward moves every box away from the image centre
+    by k h (x - centre) a frame. The tracker estimates k from consecutive frames' detections
+    (shrunk toward 0 unless it is pinned to 5 standard errors) and hands it to the filter,
+    which moves each component exactly so (centre, velocity and half-size by 1 + k h, the
+    covariance by its square). Off by default."""
+    assert TrackerConfig().camera_expansion is False
+    centre = np.array([621.0, 187.5])
+    k = 0.0004  # 1 / px a frame
+
+    def scene(t):
+        """Six parked cars, each moving away from the centre by k h (x - c) a frame."""
+        boxes = []
+        for x, y, h in [(300, 150, 60), (900, 160, 70), (200, 200, 90), (1000, 190, 80),
+                        (450, 170, 50), (800, 175, 55)]:
+            c = np.array([x, y], float)
+            hh = float(h)
+            for _ in range(t):
+                s = 1 + k * hh
+                c = centre + s * (c - centre)
+                hh *= s
+            boxes.append([c[0] - hh, c[1] - hh / 2, 2 * hh, hh])
+        return np.array(boxes)
+
+    def tracker(expand):
+        return Tracker(TrackerConfig(occlusion="none", camera_motion="detections",
+                                     camera_expansion=expand, image_size=(1242.0, 375.0),
+                                     fps=10.0))
+
+    plain, expanding = tracker(False), tracker(True)
+    for t in range(6):
+        plain.step(scene(t))
+        expanding.step(scene(t))
+    assert len(plain._camera_motion(scene(6), 0.1)) == 3
+    motion = expanding._camera_motion(scene(6), 0.1)
+    focus, learnt = motion[3]
+    np.testing.assert_array_equal(focus, centre)
+    assert learnt == pytest.approx(k, rel=0.1)
+
+    f = expanding.filter
+    n = f.n
+    mean, cov = f.mean[:n].copy(), f.cov[:n].copy()
+    f.expand_image(centre, k)
+    scale = 1 + k * 2 * mean[:, 1, 2]
+    for axis in range(2):
+        np.testing.assert_allclose(f.mean[:n, axis, 0],
+                                   centre[axis] + scale * (mean[:, axis, 0] - centre[axis]))
+        np.testing.assert_allclose(f.mean[:n, axis, 1:], mean[:, axis, 1:] * scale[:, None])
+    np.testing.assert_allclose(f.cov[:n], cov * scale[:, None, None, None] ** 2)

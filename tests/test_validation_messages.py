@@ -57,8 +57,6 @@ CONFIG_CASES = [
     (dict(occlusion_ramp=(0.25, 0.25)), "occlusion_ramp must rise: (zero point, one point)"),
     (dict(birth_half_size=(10.0, 0.0)),
      "birth_half_size must be two positive numbers (horizontal, vertical)"),
-    (dict(birth_half_size_std=(1.0, 2.0, 3.0)),
-     "birth_half_size_std must be two positive numbers (horizontal, vertical)"),
     *[(change, f"{name} must be a positive number, not {next(iter(change.values()))}"
        if name not in ("image width", "image height") else
        f"{name} must be a positive number, not ")

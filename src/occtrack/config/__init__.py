@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -63,6 +64,8 @@ class TrackerConfig:
     frame_step: int = 1  # track every frame_step-th frame, report every frame
     camera_motion: str = "detections"  # estimate the camera's shift from the detections, or
     # "none" (a still camera); a per-frame motion given to Tracker.step always wins
+    camera_expansion: bool = False  # with "detections", also the camera's forward motion
+    # (each box moves away from the image centre by k h, h its height: tracker.camera)
 
     # 0: grow with the scene (arrays double when full; memory follows the people in view, not
     # the time); a positive number is a hard limit, reported once (a warning) when it bites:
@@ -155,6 +158,13 @@ class TrackerConfig:
     gate_sigmas: float = 9.0
 
     def __post_init__(self) -> None:
+        # the API checks what the TOML loader checks (`build`), naming the field: a type
+        # that fits (numpy's numbers too) is taken as the field's, anything else refused
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if value is None and field.default is None:
+                continue
+            object.__setattr__(self, field.name, _coerce(field.name, value, field.default))
         self.validate()
 
     @property
@@ -309,26 +319,35 @@ def check_ranges(settings, ranges: dict[str, str]) -> None:
             raise ValueError(f"{name} must be a number in {interval}, not {value}")
 
 
+def _is_bool(value) -> bool:
+    """Python's or numpy's bool (numpy is not imported here: the settings load without it)."""
+    kind = type(value)
+    return isinstance(value, bool) or (kind.__module__ == "numpy"
+                                       and kind.__name__ in ("bool", "bool_"))
+
+
 def _coerce(name: str, value, default):
-    """Check a TOML value against the type of the field's default."""
+    """Check a value (from TOML or the API) against the type of the field's default, and
+    give it that type: a whole number for an integer field, a float for a number, a pair of
+    floats for a pair (numpy's numbers count as numbers)."""
     if isinstance(default, bool):
-        if not isinstance(value, bool):
+        if not _is_bool(value):
             raise TypeError(f"{name} must be true or false, not {value!r}")
-        return value
+        return bool(value)
     if isinstance(default, str):
         if not isinstance(value, str):
             raise TypeError(f"{name} must be a string, not {value!r}")
         return value
     if isinstance(default, int):
-        if isinstance(value, bool) or not isinstance(value, int):
+        if _is_bool(value) or not isinstance(value, numbers.Integral):
             raise TypeError(f"{name} must be an integer, not {value!r}")
-        return value
+        return int(value)
     if isinstance(default, tuple) or (default is None and isinstance(value, list | tuple)):
         if not isinstance(value, list | tuple) or len(value) != 2 or not all(
-                isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+                isinstance(v, numbers.Real) and not _is_bool(v) for v in value):
             raise TypeError(f"{name} must be a pair of numbers like [1.0, 2.0], not {value!r}")
         return (float(value[0]), float(value[1]))
-    if isinstance(value, bool) or not isinstance(value, int | float):
+    if _is_bool(value) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number, not {value!r}")
     return float(value)
 

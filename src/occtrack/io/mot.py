@@ -176,7 +176,8 @@ def read_detections(path: str | os.PathLike, image_size: tuple[float, float], *,
     resized frame reports them): it is skipped, and the warning gives the count and the first
     line. A row with a zero or negative size, or a score outside [0, 1] (after `score_range`
     (lo, hi) maps lo..hi linearly onto 0..1), is an error naming its line, unless `lenient`:
-    then such boxes are skipped and such scores clipped, with their counts in the warning."""
+    then such boxes are skipped and such scores clipped, with their counts in the warning.
+    A row that repeats another of its frame exactly is merged into it, with a count."""
     return check_detections(_read(str(path), "det"), image_size, score_range=score_range,
                             lenient=lenient, max_gap_frames=max_gap_frames,
                             num_frames=num_frames)
@@ -228,9 +229,31 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
         notes.append(f"clipped {int(clipped.sum())} scores to [0, 1] (first at line "
                      f"{table.line[clipped][0]})")
     table = dataclasses.replace(table, score=np.clip(score, 0.0, 1.0)).select(~skip)
+    twins = exact_duplicates(table)
+    if twins.any():
+        first = int(np.flatnonzero(twins)[0])
+        notes.append(f"merged {int(twins.sum())} rows that repeat another row of their frame "
+                     f"exactly (first at line {table.line[first]}; a file concatenated "
+                     f"twice?)")
+        table = table.select(~twins)
     if max_gap_frames is not None:
         check_gaps(table, max_gap_frames, num_frames)
     return table, (f"{table.path}: " + "; ".join(notes)) if notes else None
+
+
+def exact_duplicates(table: MotTable) -> np.ndarray:
+    """(N,) bool: the rows that repeat an earlier row of the same frame exactly (frame, box,
+    score and class): one detection written twice, which a tracker would take for two
+    objects in the same place."""
+    n = len(table)
+    if n < 2:
+        return np.zeros(n, dtype=bool)
+    keys = np.column_stack([table.frame, table.box, table.score, table.cls]).astype(float)
+    order = np.lexsort((np.arange(n), *keys.T[::-1]))
+    same = (keys[order][1:] == keys[order][:-1]).all(axis=1)
+    twins = np.zeros(n, dtype=bool)
+    twins[order[1:][same]] = True
+    return twins
 
 
 def check_gaps(table: MotTable, max_gap_frames: int, num_frames: int | None = None) -> None:

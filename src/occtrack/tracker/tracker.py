@@ -155,6 +155,7 @@ class TrackResult:
 
 
 REFRESH_NOISE = 10  # tracked frames between renewals of the learnt size noise
+EXPANSION_SIGMAS = 5.0
 
 
 class Tracker:
@@ -325,6 +326,12 @@ class Tracker:
             return np.ones(2), np.zeros(2), self._camera_power.copy()
         shift, error = motion[0], motion[1]
         self._camera_power = keep * self._camera_power + (1.0 - keep) * shift ** 2
+        if self.config.camera_expansion and expansion is not None:
+            k, variance = expansion
+            # an estimate that the detections barely pin is shrunk toward a still camera
+            # (James-Stein: k (1 - var / k^2)^+), so a walker's own steps move no box
+            k = k * max(0.0, 1.0 - EXPANSION_SIGMAS**2 * variance / max(k * k, 1e-300))
+            return np.ones(2), shift, error ** 2, (self._centre, k)
         return np.ones(2), shift, error ** 2
 
     def tracks(self) -> Tracks:

@@ -305,7 +305,9 @@ class GaussianMixturePMB:
             self._learn_sizes(z, observed)
         self.measurement.learn(z, observed)
         if camera is not None:
-            self.move_image(*camera)
+            self.move_image(*camera[:3])
+            if len(camera) > 3:
+                self.expand_image(*camera[3])
         self._predict()
         self._recycle_unplaced()
         self._add_births(z, observed)
@@ -344,6 +346,21 @@ class GaussianMixturePMB:
             shift_variance, dtype=float)
         _move_in_place(self.mean[:n], self.cov[:n], np.ascontiguousarray(scale, dtype=float),
                        np.ascontiguousarray(shift, dtype=float), variance)
+
+    def expand_image(self, centre: np.ndarray, k: float) -> None:
+        """Carry every component along a camera's forward motion: a point at x moves to
+        centre + (1 + k h) (x - centre), h the component's box height standing for its
+        inverse depth (`tracker.camera.estimate_expansion`); velocity and half-size scale by
+        the same 1 + k h, the covariance by its square."""
+        n = self.n
+        if n == 0 or k == 0.0:
+            return
+        mean, cov = self.mean[:n], self.cov[:n]
+        scale = np.maximum(1.0 + k * 2.0 * mean[:, 1, 2], 0.5)  # (a bad fit cannot fold a box)
+        for axis in range(2):
+            mean[:, axis, 0] = centre[axis] + scale * (mean[:, axis, 0] - centre[axis])
+        mean[:, :, 1:] *= scale[:, None, None]
+        cov *= (scale ** 2)[:, None, None, None]
 
     def _predict(self) -> None:
         n = self.n
