@@ -161,8 +161,8 @@ def test_lenient_skips_and_clips_with_one_warning(tmp_path):
     assert table.line.tolist() == [1, 3, 5] and table.score.tolist() == [0.5, 1.0, 0.0]
     assert warning == (f"{tmp_path / 'f.txt'}: skipped 1 boxes wholly outside the 640x480 image "
                        f"(first at line 4; check the image size if that is many); skipped 1 rows "
-                       f"with a zero or negative size (first at line 2); clipped 2 scores to "
-                       f"[0, 1] (first at line 3)")
+                       f"with a zero or negative size or a coordinate beyond 1e+06 px (first at "
+                       f"line 2); clipped 2 scores to [0, 1] (first at line 3)")
 
 
 @pytest.mark.parametrize("row", ["1,-1,700,10,20,50,0.9", "1,-1,-30,10,20,50,0.9",

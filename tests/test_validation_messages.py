@@ -176,8 +176,10 @@ def test_update_refuses_a_timestamp_that_does_not_increase():
 
 
 STEP_CASES = [
-    (dict(dt=0.0), "dt must be a positive number of seconds, not 0.0"),
-    (dict(dt=-0.5), "dt must be a positive number of seconds, not -0.5"),
+    (dict(dt=0.0), "dt must be at least 1e-06 s (frames a microsecond apart are one frame), "
+                   "not 0"),
+    (dict(dt=-0.5), "dt must be at least 1e-06 s (frames a microsecond apart are one frame), "
+                    "not -0.5"),
     (dict(dt="soon"), "dt must be a number of seconds, not 'soon'"),
     (dict(dt=math.inf), "dt must be a finite number of seconds, not inf"),
     (dict(boxes=[[10, 10, 20, 20]], scores=[1.0, 1.0]), "scores must be 1 finite numbers"),

@@ -34,6 +34,8 @@ from occtrack._compat import tomllib
 from occtrack.errors import OcctrackError, opening
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
+MIN_FPS, MAX_FPS = 0.01, 10_000.0
+MAX_IMAGE_SIDE = 100_000.0
 CAMERA_MOTION_NAMES = ("detections", "none")
 CONFIDENCE_CENTRES = ("detection", "posterior")
 # integer settings whose size sets memory or run time: far beyond any scene, short of a hang
@@ -62,6 +64,9 @@ class TrackerConfig:
     image_size: tuple[float, float] = (1920.0, 1080.0)  # width, height in px
     fps: float = 30.0  # frames per second of the sequence
     frame_step: int = 1  # track every frame_step-th frame, report every frame
+    # s: after a longer gap between two frames nothing can be carried across (a prediction
+    # over an hour says nothing); every track ends with a warning and tracking starts afresh
+    max_gap: float = 600.0
     camera_motion: str = "detections"  # estimate the camera's shift from the detections, or
     # "none" (a still camera); a per-frame motion given to Tracker.step always wins
     camera_expansion: bool = False  # with "detections", also the camera's forward motion
@@ -208,6 +213,18 @@ class TrackerConfig:
         for name, value in positive.items():
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number, not {value}")
+        # what a camera can be: from a frame every 100 s (time-lapse) to 10,000 a second
+        # (high speed), images up to 100,000 px a side (a gigapixel panorama is 40,000)
+        if not MIN_FPS <= self.fps <= MAX_FPS:
+            raise ValueError(f"fps must be between {MIN_FPS:g} and {MAX_FPS:g} frames a "
+                             f"second, not {self.fps:g}")
+        for name, value in (("image width", w), ("image height", h)):
+            if value > MAX_IMAGE_SIDE:
+                raise ValueError(f"{name} must be at most {MAX_IMAGE_SIDE:g} px, not "
+                                 f"{value:g}")
+        if not self.max_gap > 0:
+            raise ValueError(f"max_gap must be a positive number of seconds, not "
+                             f"{self.max_gap}")
         non_negative = {"position_noise": self.position_noise,
                         "velocity_noise": self.velocity_noise, "size_noise": self.size_noise,
                         "death_rate": self.death_rate, "border_margin": self.border_margin,

@@ -25,6 +25,7 @@ from occtrack.errors import OcctrackError, opening
 from occtrack.io.atomic import atomic_write
 
 KINDS = ("det", "gt", "result")
+MAX_COORDINATE = 1e6  # px: no image is that large (occtrack.tracker.boxes.MAX_COORDINATE)
 MAX_FRAME = 2**31 - 1
 MIN_ID, MAX_ID = -(2**31), 2**31 - 1
 
@@ -190,7 +191,7 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
     """`read_detections`' checks on a table already read (from any format)."""
     width, height = image_size
     left, top, w, h = table.box.T
-    bad_size = (w <= 0) | (h <= 0)
+    bad_size = (w <= 0) | (h <= 0) | (np.abs(table.box) > MAX_COORDINATE).any(axis=1)
     outside = ~bad_size & ((left + w <= 0) | (top + h <= 0) | (left >= width) | (top >= height))
     score = table.score
     if score_range is not None:
@@ -201,7 +202,11 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
     if not lenient and (bad_size | off).any():
         i = int(np.argmax(bad_size | off))
         l_, t_, w_, h_ = table.box[i]
-        if bad_size[i]:
+        if bad_size[i] and np.abs(table.box[i]).max() > MAX_COORDINATE:
+            problem = (f"box at ({l_:g}, {t_:g}) of size {w_:g} x {h_:g} has a coordinate "
+                       f"beyond {MAX_COORDINATE:g} px: no image is that large; pass --lenient "
+                       f"to skip such rows")
+        elif bad_size[i]:
             problem = (f"box size {w_:g} x {h_:g}: width and height must be positive; pass "
                        f"--lenient to skip such rows")
         elif score_range is None:
@@ -222,8 +227,9 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
                      f"(first at line {table.line[outside][0]}; check the image size if "
                      f"that is many)")
     if bad_size.any():
-        notes.append(f"skipped {int(bad_size.sum())} rows with a zero or negative size "
-                     f"(first at line {table.line[bad_size][0]})")
+        notes.append(f"skipped {int(bad_size.sum())} rows with a zero or negative size or a "
+                     f"coordinate beyond {MAX_COORDINATE:g} px (first at line "
+                     f"{table.line[bad_size][0]})")
     clipped = off & ~skip
     if clipped.any():
         notes.append(f"clipped {int(clipped.sum())} scores to [0, 1] (first at line "

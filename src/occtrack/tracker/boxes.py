@@ -54,6 +54,11 @@ def to_ltwh(boxes: npt.ArrayLike, box_format: str) -> np.ndarray:
                          f"{arr.shape}")
     if not np.isfinite(arr).all():
         raise ValueError("boxes contain NaN or infinity")
+    beyond = np.abs(arr) > MAX_COORDINATE
+    if beyond.any():
+        i = int(np.flatnonzero(beyond.any(axis=1))[0])
+        raise ValueError(f"box {i} {arr[i].tolist()} has a coordinate beyond "
+                         f"{MAX_COORDINATE:g} px: no image is that large")
     out = arr.copy()
     if box_format == "xyxy":
         out[:, 2:] = arr[:, 2:] - arr[:, :2]
@@ -120,6 +125,11 @@ def check_time(value: object, what: str) -> float:
     return value
 
 
+MAX_COORDINATE = 1e6
+"""px: a box coordinate or size beyond this is no box of any image (`MAX_IMAGE_SIDE` is
+1e5); the filter's arithmetic is safe for everything within it."""
+
+
 def checked_frame(boxes: object, scores: object) -> np.ndarray | None:
     """The fast path of `Tracker.step`'s checks, for what a detector loop hands it: float64
     arrays (M, 4) of boxes left, top, width, height and (M,) scores, all finite, no size
@@ -129,6 +139,6 @@ def checked_frame(boxes: object, scores: object) -> np.ndarray | None:
             and boxes.shape[1] == 4 and type(scores) is np.ndarray
             and scores.dtype == np.float64 and scores.shape == (len(boxes),)):
         ok, out = _checked_ltwh(np.ascontiguousarray(boxes), np.ascontiguousarray(scores))
-        if ok:
+        if ok and (not len(out) or np.abs(out).max() <= MAX_COORDINATE):
             return out
     return None

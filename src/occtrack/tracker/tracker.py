@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 import os
 import time
+import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
@@ -154,6 +155,7 @@ class TrackResult:
         return len(np.unique(self.id))
 
 
+MIN_DT = 1e-6  # s: the shortest time between two frames
 REFRESH_NOISE = 10  # tracked frames between renewals of the learnt size noise
 EXPANSION_SIGMAS = 5.0
 
@@ -200,6 +202,13 @@ class Tracker:
         self._scores = ScoreLearner(c.score_floor, c.clutter_score_power)
         if c.learn_score_model:
             self.filter.measurement.score_model = self._scores
+
+    def _restart(self) -> None:
+        """Forget every object, as `reset`, but go on numbering ids where they were (a
+        restart inside one run must not give a new object an old object's id)."""
+        next_id = self._next_id
+        self.reset()
+        self._next_id = next_id
 
     def update(self, boxes: npt.ArrayLike, scores: npt.ArrayLike | None = None,
                classes: npt.ArrayLike | None = None, timestamp: float | None = None,
@@ -277,8 +286,15 @@ class Tracker:
         labels = check_classes(classes, len(boxes))
         if dt is not None:
             dt = check_time(dt, "dt")
-            if dt <= 0:
-                raise ValueError(f"dt must be a positive number of seconds, not {dt}")
+            if dt < MIN_DT:
+                raise ValueError(f"dt must be at least {MIN_DT:g} s (frames a microsecond "
+                                 f"apart are one frame), not {dt:g}")
+            if dt > self.config.max_gap:
+                warnings.warn(f"occtrack: {dt:g} s since the previous frame, more than "
+                              f"max_gap ({self.config.max_gap:g} s): every track ends and "
+                              f"tracking starts afresh", stacklevel=2)
+                self._restart()
+                dt = None
         camera = None
         if camera_motion is not None:
             affine = as_array(camera_motion, "camera_motion", "(a 2 x 3 affine matrix)")
