@@ -249,17 +249,45 @@ def run_job(job: Job) -> dict:
     return out
 
 
-def _run_jobs(jobs: list[Job], engine):
+def _run_jobs(jobs: list, engine, runner=None):
     """(job, result, error) as each job finishes: on `engine` (occtrack.experiments.sweep's
-    DaskEngine, started by the caller) or, with None, here one after another."""
+    DaskEngine, started by the caller) or, with None, here one after another. `runner`
+    (default `run_job`) runs one job."""
+    runner = runner or run_job
     if engine is not None:
-        yield from engine.map(run_job, jobs)
+        yield from engine.map(runner, jobs)
         return
     for job in jobs:
         try:
-            yield job, run_job(job), None
+            yield job, runner(job), None
         except Exception as err:  # noqa: BLE001 - reported with its job, as on Dask
             yield job, None, err
+
+
+def run_jobs(jobs: list, engine, quiet: bool, runner=None, where=None) -> dict:
+    """Every job's result, {job: result}, run on `engine` (started here unless the caller
+    started it) or here; once all have finished, an OcctrackError naming each failed run
+    (`where(job)` says which: by default the job's tracker and folder)."""
+    where = where or (lambda job: f"{job.tracker} on {job.folder}")
+    done: dict = {}
+    failed: list[str] = []
+    with contextlib.ExitStack() as stack:
+        if engine is not None:
+            if not engine.started:  # else the caller started it and stops it
+                stack.enter_context(engine)
+            engine.warm("benchmark")
+        for job, out, err in progress(_run_jobs(jobs, engine, runner), len(jobs), "benchmark",
+                                      quiet):
+            if err is not None:
+                what = (err.message if isinstance(err, OcctrackError)
+                        else f"{type(err).__name__}: {err}")
+                failed.append(f"{where(job)}: {what}")
+            else:
+                done[job] = out
+    if failed:
+        raise OcctrackError(f"{len(failed)} of {len(jobs)} runs failed (the others finished): "
+                            + "; ".join(failed))
+    return done
 
 
 def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
@@ -284,24 +312,7 @@ def benchmark(root: str | os.PathLike, trackers: list[str], quiet: bool = False,
                          for k, v in (settings or {}).items()))
     jobs = [Job(str(seq.folder.resolve()), name, per_frame, keep_boxes, pairs)
             for seq in sequences for name in trackers]
-    done: dict[Job, dict] = {}
-    failed: list[str] = []
-    with contextlib.ExitStack() as stack:
-        if engine is not None:
-            if not engine.started:  # else the caller started it and stops it
-                stack.enter_context(engine)
-            engine.warm("benchmark")
-        for job, out, err in progress(_run_jobs(jobs, engine), len(jobs), "benchmark",
-                                      quiet):
-            if err is not None:
-                what = (err.message if isinstance(err, OcctrackError)
-                        else f"{type(err).__name__}: {err}")
-                failed.append(f"{job.tracker} on {job.folder}: {what}")
-            else:
-                done[job] = out
-    if failed:
-        raise OcctrackError(f"{len(failed)} of {len(jobs)} runs failed (the others finished): "
-                            + "; ".join(failed))
+    done = run_jobs(jobs, engine, quiet)
     raw: dict[str, list[dict]] = {name: [] for name in trackers}
     calibrations: dict[str, list] = {name: [] for name in trackers}
     seconds: dict[str, float] = dict.fromkeys(trackers, 0.0)

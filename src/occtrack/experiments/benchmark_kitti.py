@@ -21,7 +21,6 @@ class), pooled over the sequences. Runs go on `occtrack sweep`'s engine, as
 
 from __future__ import annotations
 
-import contextlib
 import os
 import time
 from dataclasses import dataclass
@@ -31,7 +30,14 @@ import numpy as np
 
 from occtrack import peers
 from occtrack.errors import OcctrackError
-from occtrack.experiments.benchmark import COLUMNS, FRACTIONS, MODELS, _header, _row
+from occtrack.experiments.benchmark import (
+    COLUMNS,
+    FRACTIONS,
+    MODELS,
+    _header,
+    _row,
+    run_jobs,
+)
 from occtrack.io.kitti import (
     UNKNOWN_3D,
     KittiTable,
@@ -50,7 +56,6 @@ from occtrack.metrics.trackeval_kitti import (
     sequence_results,
     summary,
 )
-from occtrack.progress import progress
 from occtrack.tracker import Tracker, TrackerConfig
 
 PROTOCOL = "kitti"
@@ -215,17 +220,6 @@ def run_job(job: Job) -> dict:
     return out
 
 
-def _run_jobs(jobs: list[Job], engine):
-    if engine is not None:
-        yield from engine.map(run_job, jobs)
-        return
-    for job in jobs:
-        try:
-            yield job, run_job(job), None
-        except Exception as err:  # noqa: BLE001 - reported with its job, as on Dask
-            yield job, None, err
-
-
 def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | None = None,
               classes: tuple[str, ...] = CLASSES, quiet: bool = False, engine=None,
               settings: dict | None = None) -> dict:
@@ -248,24 +242,8 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
         return Job(str(base), detections, sequence, tracker, tuple(classes), pairs)
 
     jobs = [job_of(seq.name, name) for seq in sequences for name in trackers]
-    done: dict[Job, dict] = {}
-    failed: list[str] = []
-    with contextlib.ExitStack() as stack:
-        if engine is not None:
-            if not engine.started:
-                stack.enter_context(engine)
-            engine.warm("benchmark")
-        for job, out, err in progress(_run_jobs(jobs, engine), len(jobs), "benchmark",
-                                      quiet):
-            if err is not None:
-                what = (err.message if isinstance(err, OcctrackError)
-                        else f"{type(err).__name__}: {err}")
-                failed.append(f"{job.tracker} on {job.sequence}: {what}")
-            else:
-                done[job] = out
-    if failed:
-        raise OcctrackError(f"{len(failed)} of {len(jobs)} runs failed (the others finished): "
-                            + "; ".join(failed))
+    done = run_jobs(jobs, engine, quiet, run_job,
+                    lambda job: f"{job.tracker} on {job.sequence}")
     report: dict = {"protocol": PROTOCOL, "layout": "kitti", "folder": str(base),
                     "detections": detections, "trackers": list(trackers),
                     "classes": list(classes), "sequences": {},
