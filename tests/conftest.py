@@ -69,10 +69,15 @@ def mot17_04_gt(mot17_04) -> Path:
 
 @pytest.fixture(scope="session")
 def kitti_root() -> Path:
-    """The KITTI tracking folder beside the checkout (label_02/, det_02/rrc/, det_02/pointrcnn/,
-    seqinfo/); skip, or fail in CI, without it."""
-    root = CHECKOUT.parent / "shared" / "data" / "kitti"
-    if not (root / "det_02").is_dir() or not (root / "seqinfo").is_dir():
-        data_missing(f"KITTI tracking data not found: no det_02/ and seqinfo/ in {root} "
-                     f"(../shared/data/kitti of the checkout)")
-    return root
+    """The KITTI tracking folder (label_02/, det_02/rrc/, det_02/pointrcnn/, seqinfo/): beside
+    the checkout (../shared/data/kitti), else beside the MOT17 folder OCCTRACK_DATA names (the
+    data folder's kitti/, where .ci/run finds MOT17); skip, or fail in CI, without it."""
+    tried = [CHECKOUT.parent / "shared" / "data" / "kitti"]
+    if os.environ.get("OCCTRACK_DATA"):
+        tried.append(Path(os.environ["OCCTRACK_DATA"]).parent / "kitti")
+    for root in tried:
+        if (root / "det_02").is_dir() and (root / "seqinfo").is_dir():
+            return root
+    data_missing("KITTI tracking data not found: no det_02/ and seqinfo/ in "
+                 + " or ".join(str(root) for root in tried)
+                 + " (../shared/data/kitti of the checkout, or kitti/ beside OCCTRACK_DATA)")
