@@ -23,3 +23,16 @@ def add_engine_options(parser: argparse.ArgumentParser, sequential_help: str) ->
     engine.add_argument("--scheduler", metavar="ADDRESS",
                         help="a running Dask scheduler, e.g. tcp://127.0.0.1:8786")
     engine.add_argument("--sequential", action="store_true", help=sequential_help)
+
+
+def existing_file(path: str, expected: str) -> None:
+    """Refuse, naming `path`, an input that is missing or a folder, before anything is looked
+    up beside it (a missing detection file is "no such file", not "image size unknown")."""
+    import os
+
+    from occtrack.errors import OcctrackError
+
+    if not os.path.exists(path):
+        raise OcctrackError("no such file", path)
+    if os.path.isdir(path):
+        raise OcctrackError(f"is a directory, expected {expected}", path)

@@ -74,6 +74,11 @@ def run(args: argparse.Namespace) -> int:
         raise OcctrackError("give ground truth and detections in pairs: GT DET [GT DET ...]")
     if args.output is not None:
         check_output(args.output, args.force, args.files)
+    from occtrack.cli.arguments import existing_file
+
+    for path, expected in zip(args.files, ("a ground-truth file", "a detection file") *
+                              (len(args.files) // 2), strict=True):
+        existing_file(path, expected)
     sequences = []
     for gt_path, det_path in zip(args.files[::2], args.files[1::2], strict=True):
         folder = find_seqinfo(gt_path)

@@ -186,12 +186,14 @@ def seqinfo_path(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from occtrack.cli.arguments import existing_file
     from occtrack.io import kitti as kitti_io
     from occtrack.io import mot
     from occtrack.io.atomic import check_output
     from occtrack.progress import summary
     from occtrack.tracker import Tracker
 
+    existing_file(args.detections, "a detection file")
     seq = mot.find_seqinfo(args.detections)  # either layout's, before the file is opened
     check_output(args.output, args.force,
                  (args.detections, args.config, seq and seq / "seqinfo.ini",

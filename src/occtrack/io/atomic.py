@@ -4,6 +4,8 @@ Every file occtrack writes goes first to a temporary file in the destination's f
 renamed over the destination only once complete (`os.replace` is atomic within a folder), so a
 run that fails or is interrupted midway (an error, Ctrl-C, a full disk) leaves the old file, or
 none, never a partial one. The old file is never removed before its replacement is complete.
+A FIFO or a device (`-o /dev/null`) is no file to replace: it is written into directly, as
+standard output is.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import os
 import secrets
 import shutil
+import stat
 import sys
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
@@ -44,12 +47,25 @@ def check_output(path: str | os.PathLike, overwrite: bool = False,
                                 str(target))
     if target.is_dir():
         raise OcctrackError("is a folder; give a file name for the output", str(target))
+    if is_special(target):  # written in place (`atomic_path`): nothing there is replaced
+        return target
     if target.exists() and not overwrite:
         raise OcctrackError("exists already; pass --force to overwrite it", str(target))
     if not target.resolve().parent.is_dir():
         raise OcctrackError("folder does not exist", str(target.parent))
     _probe(target)
     return target
+
+
+def is_special(target: Path) -> bool:
+    """Whether `target` (through symlinks) is a FIFO or a device: a stream to write into, never
+    a file to rename over (`--force -o /dev/null` as root would otherwise replace the system's
+    /dev/null with a regular file)."""
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:
+        return False
+    return stat.S_ISFIFO(mode) or stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
 
 
 def _real(target: Path) -> Path:
@@ -126,6 +142,9 @@ def atomic_path(path: str | os.PathLike, overwrite: bool = False) -> Iterator[Pa
     checked = check_output(path, overwrite)
     if checked is None:
         raise OcctrackError("cannot write this output to standard output; give a file name")
+    if is_special(checked):  # a pipe or a device: written into directly, as standard output
+        yield checked
+        return
     target = _real(checked)
     try:
         tmp = _temporary(target)
