@@ -63,3 +63,33 @@ def test_a_missing_input_is_no_such_file(argv, det, tmp_path, capsys):
     assert main([a.format(**values) for a in argv]) == 1
     err = capsys.readouterr().err
     assert err.strip().endswith(f"{missing}: no such file") and err.count("\n") == 1
+
+
+def _without_eval_extra(argv: list[str]):
+    """`occtrack ARGV` in a fresh interpreter where motmetrics and TrackEval cannot be
+    imported (as on the core install)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.modules['motmetrics'] = None; sys.modules['trackeval'] = None\n"
+            "from occtrack.cli import main\n"
+            f"sys.exit(main({argv!r}))")
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+
+
+@pytest.mark.parametrize("argv, status", [
+    (["reproduce", "--help"], 0),
+    (["reproduce", "table2", "--help"], 0),
+    (["reproduce", "table2", "--seed", "2"], 1),
+])
+def test_reproduce_without_the_eval_extra_names_it(argv, status):
+    done = _without_eval_extra(argv)
+    assert done.returncode == status, done.stderr
+    assert "Traceback" not in done.stderr
+    if argv[1:2] == ["table2"]:
+        said = done.stdout if status == 0 else done.stderr
+        assert ('occtrack reproduce table2 needs motmetrics, from the optional \'eval\' extra: '
+                'install it with pip install "occtrack[eval]"') in said
+    else:
+        assert "table2" in done.stdout
