@@ -401,3 +401,28 @@ def test_lidar_cells_check_the_derived_beam_likelihood(tmp_path):
                       ("p_d = [0.7, 0.9]", "speed = [1.0]")):
         with pytest.raises(OcctrackError, match=r"max_range|p_d|unknown lidar setting"):
             sweep.load_spec(write(tmp_path / "b.toml", LIDAR_SPEC.replace(bad, says)))
+
+
+class _Unreachable:
+    """An engine whose scheduler cannot be reached (what DaskEngine raises then)."""
+
+    started = False
+
+    def __enter__(self):
+        raise OcctrackError("cannot reach the Dask scheduler at tcp://127.0.0.1:1")
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_an_engine_that_never_starts_leaves_no_table(tmp_path):
+    """Issue 38: a sweep whose scheduler cannot be reached wrote a 0-column Parquet file,
+    which the same command then refused once the scheduler ran; now nothing is left, and
+    the rerun works."""
+    pytest.importorskip("pandas")
+    spec = sweep.load_spec(write(tmp_path / "hw.toml", HIGHWAY_SPEC))
+    out = tmp_path / "hw.parquet"
+    with pytest.raises(OcctrackError, match="cannot reach the Dask scheduler"):
+        sweep.sweep(spec, out, _Unreachable())
+    assert not out.exists() and not list(tmp_path.glob(".*partial*"))
+    assert sweep.sweep(spec, out).ran == 8

@@ -976,8 +976,10 @@ class _Store:
         self.table = write_table(self.output, self.old, self.rows, self.order)
         self.last = time.perf_counter()
 
-    def close(self) -> None:
-        if self.rows or not Path(self.output).exists():
+    def close(self, completed: bool = True) -> None:
+        """Write the rows; a run that ended early with none (an unreachable scheduler)
+        leaves no table behind, where a completed one with none writes the empty table."""
+        if self.rows or (completed and not Path(self.output).exists()):
             self.write()
 
 
@@ -1026,15 +1028,17 @@ def sweep(spec: Spec, output: str | os.PathLike, engine: DaskEngine | None = Non
 
         start = time.perf_counter()
         notes: list[str] = []
+        completed = False
         try:
             if spec.search is None:
                 cells = plan(spec)
                 execute(cells)
             else:
                 cells, notes = _run_search(spec, execute, store)
+            completed = True
         finally:
             seconds = time.perf_counter() - start
-            store.close()
+            store.close(completed)
     failures.sort(key=lambda f: f.cell.index)
     return Outcome(table=store.table, cells=cells, ran=len(store.rows), skipped=skipped,
                    failures=failures, seconds=seconds,
