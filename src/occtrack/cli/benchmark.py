@@ -216,17 +216,9 @@ def _kitti_options(args: argparse.Namespace, kitti: bool) -> tuple[str, ...]:
         option = "--keep-boxes" if args.keep_boxes else "--per-frame"
         raise OcctrackError(f"{option} is for MOTChallenge folders; a KITTI run keeps the "
                             f"tables and calibration only")
-    from occtrack.metrics.trackeval_kitti import CLASSES
+    from occtrack.metrics.trackeval_kitti import parse_classes
 
-    if args.classes is None:
-        return CLASSES
-    classes = tuple(dict.fromkeys(c.strip().lower() for c in args.classes.split(",")
-                                  if c.strip()))
-    odd = [c for c in classes if c not in CLASSES]
-    if odd or not classes:
-        raise OcctrackError(f"--classes: KITTI's evaluation scores car and pedestrian, not "
-                            f"{odd[0] if odd else 'nothing'!r}")
-    return classes
+    return parse_classes(args.classes)
 
 
 def _settings(path: str | None) -> dict:

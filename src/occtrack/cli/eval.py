@@ -336,14 +336,7 @@ def _run_kitti(args: argparse.Namespace, start: float) -> int:
     if args.out_dir is not None:
         raise OcctrackError("--out-dir writes TrackEval's MOTChallenge files; the kitti "
                             "protocol prints its tables (or --json)")
-    classes = list(trackeval_kitti.CLASSES)
-    if args.classes is not None:
-        classes = list(dict.fromkeys(c.strip().lower() for c in args.classes.split(",")
-                                     if c.strip()))
-        odd = [c for c in classes if c not in trackeval_kitti.CLASSES]
-        if odd or not classes:
-            raise OcctrackError(f"--classes: KITTI's evaluation scores car and pedestrian, "
-                                f"not {odd[0] if odd else 'nothing'!r}")
+    classes = list(trackeval_kitti.parse_classes(args.classes))
     if args.frames is not None and args.frames < 1:
         raise OcctrackError(f"--frames must be at least 1, got {args.frames}")
     pairs = trackeval_kitti.sequence_pairs(args.gt, args.result)

@@ -49,6 +49,19 @@ __all__ = ["CLASSES", "combined_results", "scored_frames", "sequence_results", "
 CLASSES = ("car", "pedestrian")
 """The classes KITTI's evaluation scores (TrackEval's `Kitti2DBox` knows no others)."""
 CLASS_TYPE = {"car": TYPES.index("Car"), "pedestrian": TYPES.index("Pedestrian")}
+
+
+def parse_classes(text: str | None) -> tuple[str, ...]:
+    """`--classes car,pedestrian` (any case), checked: the classes KITTI's evaluation scores,
+    duplicates dropped, order kept; None gives both."""
+    if text is None:
+        return CLASSES
+    classes = tuple(dict.fromkeys(c.strip().lower() for c in text.split(",") if c.strip()))
+    odd = [c for c in classes if c not in CLASSES]
+    if odd or not classes:
+        raise OcctrackError(f"--classes: KITTI's evaluation scores car and pedestrian, not "
+                            f"{odd[0] if odd else 'nothing'!r}")
+    return classes
 _SEQ = "seq"
 _TRACKER = "result"
 MAX_OCCLUSION, MAX_TRUNCATION = 2, 0  # Kitti2DBox's
