@@ -262,6 +262,7 @@ def _write_kitti(args: argparse.Namespace, config, result, source) -> None:
     import numpy as np
 
     from occtrack.io.kitti import UNKNOWN_3D, clip_to_image, write_kitti
+    from occtrack.tracker.boxes import from_ltwh
 
     table, rows = source
     took = result.detection_row
@@ -271,8 +272,6 @@ def _write_kitti(args: argparse.Namespace, config, result, source) -> None:
     hit = took >= 0
     box3d[hit] = table.box3d[rows[took[hit]]]
     alpha[hit] = table.alpha[rows[took[hit]]]
-    corners = clip_to_image(np.concatenate([result.box[:, :2],
-                                            result.box[:, :2] + result.box[:, 2:]], axis=1),
-                            config.image_size)
+    corners = clip_to_image(from_ltwh(result.box, "xyxy"), config.image_size)
     write_kitti(args.output, result.frame - 1, result.id, result.classes, corners,
                 result.confidence, box3d, alpha, overwrite=args.force)

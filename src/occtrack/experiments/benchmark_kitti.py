@@ -57,6 +57,7 @@ from occtrack.metrics.trackeval_kitti import (
     summary,
 )
 from occtrack.tracker import Tracker, TrackerConfig
+from occtrack.tracker.boxes import from_ltwh
 
 PROTOCOL = "kitti"
 DEFAULT_DETECTIONS = "rrc"  # the 2D detections KITTI's 2D trackers are compared on
@@ -152,7 +153,7 @@ def result_table(frame, ids, types, ltwh, score, image_size=None) -> KittiTable:
     """Tracker rows (frames 1-based, boxes left, top, width, height) as a KITTI result; with
     `image_size`, boxes clipped to the image as `occtrack track` writes them."""
     n = len(frame)
-    box = np.concatenate([ltwh[:, :2], ltwh[:, :2] + ltwh[:, 2:]], axis=1).reshape(-1, 4)
+    box = from_ltwh(ltwh, "xyxy")
     if image_size is not None:
         box = clip_to_image(box, image_size)
     return KittiTable(frame=np.asarray(frame, np.int64) - 1, id=np.asarray(ids, np.int64),
