@@ -274,8 +274,15 @@ def sleeping(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] == "S"
 
 
+ENDINGS = {"SIGINT": (130, "interrupted"), "SIGTERM": (143, "terminated (SIGTERM)"),
+           "SIGHUP": (129, "terminated (SIGHUP)")}
+
+
+@pytest.mark.parametrize("sig", list(ENDINGS))
 @pytest.mark.parametrize("old", [True, False], ids=["old-file", "no-file"])
-def test_sigint_mid_write_leaves_the_old_file_or_none(tmp_path, old):
+def test_a_signal_mid_write_leaves_the_old_file_or_none(tmp_path, old, sig):
+    """Ctrl-C, SIGTERM (a scheduler's or `kill`'s) and SIGHUP (the terminal closed) each end
+    the run with its own status, and none leaves the hidden temporary file behind."""
     pytest.importorskip("PIL", reason='needs pip install "occtrack[viz]"')
     pytest.importorskip("av", reason='needs pip install "occtrack[viz]"')
     det = pictures_with_a_fifo(tmp_path / "SEQ", frames=8, blocked=5)
@@ -299,17 +306,41 @@ def test_sigint_mid_write_leaves_the_old_file_or_none(tmp_path, old):
     try:
         # Frames 1-4 are in the video writer, whose temporary file is open beside the output.
         assert len(partial_files(out_dir)) == 1
-        process.send_signal(signal.SIGINT)
+        process.send_signal(getattr(signal, sig))
         stdout, stderr = process.communicate(timeout=60)
     finally:
         os.close(fd)
         if process.poll() is None:
             process.kill()
-    assert process.returncode == 130 and stdout == ""
-    one_line(stderr, "occtrack render: interrupted; output files are left as they were")
+    status, said = ENDINGS[sig]
+    assert process.returncode == status and stdout == ""
+    one_line(stderr, f"occtrack render: {said}; output files are left as they were")
     assert partial_files(out_dir) == []
     if old:
         assert sorted(p.name for p in out_dir.iterdir()) == ["tracks.mp4"]
         assert out.read_bytes() == b"the old, complete video"
     else:
         assert list(out_dir.iterdir()) == []
+
+
+def test_sigterm_during_simulate_lidar_leaves_no_partial_files(tmp_path):
+    """`simulate lidar` streams three files at once; a SIGTERM while they are being written
+    removes all three temporary files (issue 38, kind 4)."""
+    out = tmp_path / "scene"
+    process = subprocess.Popen([sys.executable, "-m", "occtrack", "simulate", "lidar", "-o",
+                                str(out), "--scans", "1000000", "--quiet"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not (out.is_dir() and partial_files(out)):
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "no temporary file appeared"
+            time.sleep(0.05)
+        process.send_signal(signal.SIGTERM)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 143, stderr
+    one_line(stderr, "occtrack simulate: terminated (SIGTERM); output files are left as they")
+    assert partial_files(out) == []

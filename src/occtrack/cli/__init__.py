@@ -22,6 +22,7 @@ import argparse
 import errno
 import importlib
 import os
+import signal
 import sys
 
 from occtrack import __version__
@@ -46,6 +47,43 @@ COMMANDS = (
 )
 
 BAD_INPUT, USAGE, INTERRUPTED = 1, 2, 130
+TERMINATED = 128  # + the signal, as a shell reports it: 143 after SIGTERM, 129 after SIGHUP
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (or SIGHUP) delivered as an exception, so that every `finally` and
+    `except BaseException` on the way out runs: the temporary file of an output being written
+    (`occtrack.io.atomic`) is removed, as after Ctrl-C. Left to the default action, SIGTERM
+    ends the process at once and leaves that hidden `.partial` file beside the target."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+_MAIN_PID: list[int] = []
+
+
+def _raise_terminated(signum: int, frame) -> None:
+    if os.getpid() not in _MAIN_PID:  # a forked worker (a pool's, Dask's): die as before
+        signal.signal(signum, signal.SIG_DFL)
+        os.kill(os.getpid(), signum)
+        return
+    raise Terminated(signum)
+
+
+def _catch_termination() -> None:
+    """Turn SIGTERM and SIGHUP into `Terminated` (main thread only: signal handlers can only
+    be set there, and a library caller's own handlers are left alone)."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return
+    _MAIN_PID[:] = [os.getpid()]
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None and signal.getsignal(sig) in (signal.SIG_DFL, None):
+            signal.signal(sig, _raise_terminated)
 
 EXIT_STATUS = f"""\
 exit status:
@@ -55,6 +93,7 @@ exit status:
        names the file and what to do
   {USAGE}    usage: an unknown option or a bad option value
   {INTERRUPTED}  interrupted (Ctrl-C)
+  {TERMINATED + signal.SIGTERM}  terminated by SIGTERM ({TERMINATED + signal.SIGHUP} by SIGHUP)
 Output files are written whole or not at all: a failed or interrupted run leaves
 the old file, or none, never a partial one. --debug, given before the
 subcommand (occtrack --debug track ...), shows the traceback of a failure."""
@@ -177,16 +216,19 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return USAGE
     prog = f"occtrack {args.command}"
+    _catch_termination()
     try:
         return int(args._run(args) or 0)
     except BrokenPipeError:
         _quiet_stdout()
         return 0
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as err:
         if args.debug:
             raise
-        print(f"{prog}: interrupted; output files are left as they were", file=sys.stderr)
-        return INTERRUPTED
+        ended = isinstance(err, Terminated)
+        print(f"{prog}: {'terminated (' + str(err) + ')' if ended else 'interrupted'}; output "
+              f"files are left as they were", file=sys.stderr)
+        return TERMINATED + err.signum if ended else INTERRUPTED
     except Exception as err:
         if args.debug:
             raise

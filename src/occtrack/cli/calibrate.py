@@ -67,7 +67,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from occtrack.io.atomic import atomic_write, check_output
-    from occtrack.io.mot import find_seqinfo, read_mot, read_seqinfo
+    from occtrack.config.arguments import DAY_AT_30_FPS
+    from occtrack.io.mot import check_gaps, find_seqinfo, read_mot, read_seqinfo
     from occtrack.models.calibration import Labelled, calibrate, report_lines, to_toml
 
     if len(args.files) % 2:
@@ -96,6 +97,11 @@ def run(args: argparse.Namespace) -> int:
             if table.num_frames > frames:
                 raise OcctrackError(f"{what} reach frame {table.num_frames} but seqinfo.ini "
                                     f"says the sequence has {frames} frames", table.path)
+        # Every frame is counted (a rate is per frame) and walked, so a stray frame number
+        # or a seqinfo.ini of 10^8 frames is refused, as `occtrack track` refuses it.
+        later = det if det.num_frames >= gt.num_frames else gt
+        for table in (gt, det):
+            check_gaps(table, DAY_AT_30_FPS, frames if table is later else None, flag=None)
         name = str(info.get("name") or Path(gt_path).resolve().parent.parent.name)
         sequences.append(Labelled(name, gt, det, (float(size[0]), float(size[1])),
                                   float(fps), frames))

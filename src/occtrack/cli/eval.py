@@ -135,8 +135,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "seqinfo.ini, else the last frame in either file)")
     parser.add_argument("--max-gap-frames", type=whole_number(0), metavar="N",
                         default=DAY_AT_30_FPS,
-                        help="when the sequence length is unknown, refuse more than N empty "
-                             "frames in a row in either file, so that a stray frame number "
+                        help="refuse more than N empty frames in a row in either file, so "
+                             "that a stray frame number "
                              "cannot make the scoring walk billions of frames (default "
                              f"{DAY_AT_30_FPS}, a day at 30 fps)")
     parser.add_argument("--json", action="store_true",
@@ -160,6 +160,19 @@ def _num_frames(args: argparse.Namespace) -> int | None:
 
     folder = find_seqinfo(args.gt)
     return int(read_seqinfo(folder)["length"]) if folder is not None else None
+
+
+def _scoring_length(gt, result, stated: int | None) -> int | None:
+    """The frames to score: the stated sequence length, checked against both files, cut to
+    the last frame either file has a row in. The frames after it hold no box, so no number
+    changes (every metric sums over frames, GOSPA included), and a seqinfo.ini or --frames
+    of 10^8 costs nothing rather than memory for 10^8 empty frames."""
+    if stated is None:
+        return None
+    from occtrack.metrics.protocols import check_tables
+
+    check_tables(gt, result, stated)
+    return min(stated, max(gt.num_frames, result.num_frames, 1))
 
 
 def _format(key: str, value) -> str:
@@ -242,10 +255,10 @@ def run(args: argparse.Namespace) -> int:
         raise OcctrackError("--calibration decides which boxes are right as the mot17 protocol "
                             "does; use --protocol mot17")
     out_files = _out_files(args)
-    num_frames = _num_frames(args)
-    gap = args.max_gap_frames if num_frames is None else None
-    gt = read_mot(args.gt, "gt", max_gap_frames=gap)
-    result = read_mot(args.result, "result", max_gap_frames=gap)
+    stated = _num_frames(args)
+    gt = read_mot(args.gt, "gt", max_gap_frames=args.max_gap_frames)
+    result = read_mot(args.result, "result", max_gap_frames=args.max_gap_frames)
+    num_frames = _scoring_length(gt, result, stated)
     left_out = int(protocols.result_classes_left_out(result, args.protocol).sum())
     if left_out:
         print(f"occtrack eval: note: {left_out} of {len(result)} result rows name a class other "
@@ -286,7 +299,7 @@ def run(args: argparse.Namespace) -> int:
     if table is not None:
         print(format_reliability(table))
         print()
-    print(f"scored {frames.num_frames} frames, {frames.num_truth} true boxes, "
+    print(f"scored {stated or frames.num_frames} frames, {frames.num_truth} true boxes, "
           f"{frames.num_estimates} result boxes, {seconds:.2f} s")
     if out_files:
         print(f"TrackEval's files: {', '.join(str(p) for p in out_files.values())}")

@@ -193,6 +193,11 @@ def configure_lidar(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+MAX_SCAN_ROWS = 2_000_000_000
+"""Bound on beams x scans of `simulate lidar`: one row of scans.csv a beam, about 25 bytes, so
+50 GB of disk and a day of writing; a larger count is a typo (`--scans 1e14`), not a scene."""
+
+
 def run_lidar(args: argparse.Namespace) -> int:
     from occtrack.config.lidar import LidarSceneConfig
     from occtrack.scenarios.lidar.files import write_scene
@@ -205,6 +210,11 @@ def run_lidar(args: argparse.Namespace) -> int:
     except ValueError as err:
         raise OcctrackError(str(err)) from None
     scans = args.scans or (max(round(args.duration * args.rate), 1) if args.duration else 1800)
+    if scans * args.beams > MAX_SCAN_ROWS:
+        given = f"--scans {args.scans}" if args.scans else f"--duration {args.duration:g}"
+        raise OcctrackError(f"{given} at {args.beams} beams a scan is {scans * args.beams:.3g} "
+                            f"rows of scans.csv, more than {MAX_SCAN_ROWS:.0e} (about 50 GB); "
+                            f"write a shorter scene or fewer beams")
     start = time.perf_counter()
     done = write_scene(args.out, config, scans, args.seed, args.force,
                        lambda s: progress(s, total=scans, desc="lidar", quiet=args.quiet))

@@ -262,15 +262,17 @@ def exact_duplicates(table: MotTable) -> np.ndarray:
     return twins
 
 
-def check_gaps(table: MotTable, max_gap_frames: int, num_frames: int | None = None) -> None:
+def check_gaps(table: MotTable, max_gap_frames: int, num_frames: int | None = None,
+               flag: str | None = "--max-gap-frames") -> None:
     """Refuse more than `max_gap_frames` empty frames in a row: before the first row, between
     rows, or after the last up to `num_frames`. A tracker steps through every frame, so one
-    stray frame number of 10^9 would otherwise mean a billion steps."""
+    stray frame number of 10^9 would otherwise mean a billion steps. `flag` is the option
+    that raises the bound, named in the message (None: the command has none)."""
     frames = np.unique(table.frame)
     if not len(frames):
         return
-    limit = (f"more than the {max_gap_frames} allowed; check the frame numbers, or raise "
-             f"--max-gap-frames if the gap is real")
+    limit = f"more than the {max_gap_frames} allowed; check the frame numbers" + (
+        f", or raise {flag} if the gap is real" if flag else "")
 
     def first_line(frame: int) -> int | None:
         return None if table.line is None else int(table.line[table.frame == frame].min())

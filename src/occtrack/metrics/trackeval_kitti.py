@@ -35,7 +35,8 @@ from trackeval.datasets import Kitti2DBox
 
 from occtrack.errors import OcctrackError
 from occtrack.io.kitti import DONTCARE, TYPES, UNKNOWN, KittiTable
-from occtrack.io.mot import first_duplicate
+from occtrack.config.arguments import DAY_AT_30_FPS
+from occtrack.io.mot import check_gaps, first_duplicate
 from occtrack.metrics.protocols import ScoredFrames
 from occtrack.metrics.trackeval_mot17 import (
     _trackeval_errors,
@@ -280,7 +281,13 @@ def evaluate(pairs: list[tuple[str, Path, Path]], classes: tuple[str, ...] | lis
         for table in (gt, result):
             if table.unknown():
                 notes.append(f"{table.path}: {table.unknown()}, not scored")
-        n = frames or sequence_length(gt_path) or max(gt.num_frames, result.num_frames, 1)
+        last = max(gt.num_frames, result.num_frames, 1)
+        for table in (gt, result):
+            check_gaps(table, DAY_AT_30_FPS)
+        n = frames or sequence_length(gt_path) or last
+        check_frames(gt, n)
+        check_frames(result, n)
+        n = min(n, last)  # frames after the last row of both hold nothing to score
         if calibration:
             bad = np.flatnonzero(~((result.score >= 0) & (result.score <= 1)))
             if len(bad):
