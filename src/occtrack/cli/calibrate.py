@@ -66,8 +66,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from occtrack.io.atomic import atomic_write, check_output
     from occtrack.config.arguments import DAY_AT_30_FPS
+    from occtrack.io.atomic import atomic_write, check_output
     from occtrack.io.mot import check_gaps, find_seqinfo, read_mot, read_seqinfo
     from occtrack.models.calibration import Labelled, calibrate, report_lines, to_toml
 

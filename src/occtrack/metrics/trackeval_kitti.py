@@ -33,9 +33,9 @@ from pathlib import Path
 import numpy as np
 from trackeval.datasets import Kitti2DBox
 
+from occtrack.config.arguments import DAY_AT_30_FPS
 from occtrack.errors import OcctrackError
 from occtrack.io.kitti import DONTCARE, TYPES, UNKNOWN, KittiTable
-from occtrack.config.arguments import DAY_AT_30_FPS
 from occtrack.io.mot import check_gaps, first_duplicate
 from occtrack.metrics.protocols import ScoredFrames
 from occtrack.metrics.trackeval_mot17 import (
