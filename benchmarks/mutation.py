@@ -186,7 +186,7 @@ def report(status: dict[str, str], equivalent: set[str]) -> float:
         scored = c["killed"] + c["survived"] - c["equivalent"]
         score = c["killed"] / scored if scored else float("nan")
         print(f"{module:<42}{c['killed']:>8}{c['survived']:>10}{c['equivalent']:>12}"
-              f"{c['other']:>11}{score:>9.1%}")
+              f"{c['other']:>11}{format(score, '.1%') if scored else '-':>9}")
     scored = total["killed"] + total["survived"] - total["equivalent"]
     return total["killed"] / scored if scored else float("nan")
 
@@ -232,6 +232,13 @@ def main() -> int:
             return 1
         equivalent = equivalent_names()
         score = report(status, equivalent)
+        if score != score:  # nan: no mutant was killed or survived, so there is no score
+            print("\nno mutant was run by the tests (every one is "
+                  f"{', '.join(sorted(set(status.values())))}): the tests import an occtrack "
+                  "other than the mutated copy, as a regular (not in-place) install does; "
+                  "build in place with pip install --no-build-isolation -e . and run again",
+                  file=sys.stderr)
+            return 1
         survivors = sorted(n for n, s in status.items() if s in UNDETECTED and n not in equivalent)
         print(f"\nmutation score {score:.1%} (killed / (killed + survived - equivalent))")
         if survivors:
