@@ -109,3 +109,27 @@ def test_a_gap_under_max_gap_keeps_the_track():
         warnings.simplefilter("error")
         later = tracker.update(box, timestamp=1.0 + 0.5).ids
     assert ids.tolist() == later.tolist() == [1]
+
+
+def test_a_gap_of_1e7_seconds_between_scans_is_a_restart(tmp_path, capsys):
+    """The scan tracker ends every track after a gap beyond max_gap, as the box tracker does,
+    where a 1e7 s prediction made the scan likelihood's matrix singular; ids go on."""
+    scene = tmp_path / "scene"
+    assert main(["simulate", "lidar", "-o", str(scene), "--scans", "40", "--quiet"]) == 0
+    rows = (scene / "scans.csv").read_text().splitlines(keepends=True)
+    shifted = []
+    for row in rows:
+        if row[0].isdigit():
+            t, rest = row.split(",", 1)
+            row = f"{float(t) + (1e7 if float(t) >= 2.0 else 0.0)!r},{rest}"
+        shifted.append(row)
+    (scene / "gap.csv").write_text("".join(shifted))
+    capsys.readouterr()
+    out = tmp_path / "tracks.csv"
+    assert main(["track-scans", str(scene / "gap.csv"), "-o", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert err == ("occtrack track-scans: warning: 1e+07 s since the previous scan, more than "
+                   "max_gap (600 s): every track ends and tracking starts afresh\n")
+    table = np.genfromtxt(out, delimiter=",", names=True)
+    before, after = table["id"][table["time"] < 2.0], table["id"][table["time"] >= 2.0]
+    assert len(before) and len(after) and after.min() > before.max()

@@ -24,6 +24,8 @@ import importlib
 import os
 import signal
 import sys
+import warnings
+from contextlib import contextmanager
 
 from occtrack import __version__
 from occtrack._compat import tomllib
@@ -59,6 +61,25 @@ class Terminated(KeyboardInterrupt):
     def __init__(self, signum: int):
         super().__init__(signal.Signals(signum).name)
         self.signum = signum
+
+
+@contextmanager
+def _warnings_as_lines(prog: str):
+    """The library's warnings ("occtrack: ...", e.g. a gap past max_gap) as one line each on
+    stderr, worded as the command's other warnings, not as Python's file:line report."""
+    python_format = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = str(message)
+        if not text.startswith("occtrack: "):
+            return python_format(message, category, filename, lineno, file, line)
+        print(f"{prog}: warning: {text.removeprefix('occtrack: ')}", file=file or sys.stderr)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = python_format
 
 
 _MAIN_PID: list[int] = []
@@ -218,7 +239,8 @@ def main(argv: list[str] | None = None) -> int:
     prog = f"occtrack {args.command}"
     _catch_termination()
     try:
-        return int(args._run(args) or 0)
+        with _warnings_as_lines(prog):
+            return int(args._run(args) or 0)
     except BrokenPipeError:
         _quiet_stdout()
         return 0

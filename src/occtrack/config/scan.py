@@ -42,7 +42,7 @@ SCAN_RANGES = {
     "edge_width": "[0, 100000]", "birth_position_std": "(0, 1000]",
     "birth_speed_std": "(0, 1000]", "report_existence": "[0, 1]",
     "report_min_confidence": "[0, 1]", "confirm_hits": "[1, 1000]",
-    "confirm_window": "[1, 1000]", "gate_sigmas": "(0, 1000]",
+    "confirm_window": "[1, 1000]", "gate_sigmas": "(0, 1000]", "max_gap": "(0, 1000000]",
 }
 
 
@@ -115,6 +115,7 @@ class ScanTrackerConfig:
     confirm_window: int = 5
     gate_sigmas: float = 5.0
     cluster_noise: float = 0.1
+    max_gap: float = 600.0  # s between scans after which every track ends (as the box tracker's)
 
     def __post_init__(self) -> None:
         self.validate()

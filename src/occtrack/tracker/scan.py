@@ -18,6 +18,8 @@ of the reported one (the centre's Gaussian taken as round, with variance sx sy:
 
 from __future__ import annotations
 
+import math
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -116,9 +118,19 @@ class ScanTracker:
         if np.isnan(ranges).any() or (ranges < 0).any():
             raise ValueError("ranges must be >= 0 (inf for no return)")
         t = float(timestamp)
+        if not math.isfinite(t):
+            raise ValueError(f"timestamp must be a finite number of seconds, not {t}")
         dt = 1.0 / self.rate if self._last_time is None else t - self._last_time
         if not dt > 0:
             raise ValueError(f"timestamp {t} is not after the last ({self._last_time})")
+        if dt > self.config.max_gap:  # no prediction bridges it (its covariance would overflow)
+            warnings.warn(f"occtrack: {dt:g} s since the previous scan, more than max_gap "
+                          f"({self.config.max_gap:g} s): every track ends and tracking starts "
+                          f"afresh", stacklevel=2)
+            serial = self.filter._next_serial
+            self.reset()
+            self.filter._next_serial = serial  # ids go on where they were, never reused
+            dt = 1.0 / self.rate
         self._last_time = t
         where = self.origin if origin is None else np.asarray(origin, float)
         z = self.measurement.segments(angles, ranges, where)
