@@ -89,57 +89,172 @@ def _whole(text: str, value: float, what: str, low: int, high: int, path: str,
     return number
 
 
+CHUNK = 1 << 16  # rows parsed into Python lists before they are moved into the arrays
+
+
+def _line_bound(path: str) -> int | None:
+    """At least the number of lines of a regular file (None for a pipe or a device, which
+    cannot be read twice): newlines, plus lone carriage returns, plus one. Counted in 16 MB
+    blocks, so the arrays can be allocated once, at their final size."""
+    if not os.path.isfile(path):
+        return None
+    count = 1
+    with open(path, "rb") as fh:
+        while block := fh.read(1 << 24):
+            count += block.count(b"\n") + block.count(b"\r") - block.count(b"\r\n")
+    return count
+
+
+class _Columns:
+    """The parsed columns, filled chunk by chunk: into arrays allocated once at `capacity`
+    rows when the line count is known (a regular file), else grown by doubling. Memory is the
+    table's own, 80 bytes a row, never the file's text or a Python object a cell (which took
+    16 times the file's size)."""
+
+    NAMES = ("frame", "id", "cls", "line", "box", "score", "visibility")
+
+    def __init__(self, capacity: int | None):
+        self.size = 0
+        self.columns = self._empty(capacity or CHUNK)
+
+    @staticmethod
+    def _empty(rows: int) -> dict[str, np.ndarray]:
+        out = {name: np.empty(rows, dtype=np.int64) for name in ("frame", "id", "cls", "line")}
+        out["box"] = np.empty((rows, 4), dtype=float)
+        out["score"] = np.empty(rows, dtype=float)
+        out["visibility"] = np.empty(rows, dtype=float)
+        return out
+
+    def add(self, whole: np.ndarray, real: np.ndarray) -> None:
+        """Append n rows: (n, 4) frame, id, class, line and (n, 6) box, score, visibility."""
+        n = len(whole)
+        if not n:
+            return
+        room = len(self.columns["frame"])
+        if self.size + n > room:  # a pipe (unknown length), or lines the count did not see
+            grown = self._empty(max(2 * room, self.size + n))
+            for name, column in self.columns.items():
+                grown[name][:self.size] = column[:self.size]
+            self.columns = grown
+        rows = slice(self.size, self.size + n)
+        c = self.columns
+        c["frame"][rows], c["id"][rows] = whole[:, 0], whole[:, 1]
+        c["cls"][rows], c["line"][rows] = whole[:, 2], whole[:, 3]
+        c["box"][rows], c["score"][rows], c["visibility"][rows] = (real[:, :4], real[:, 4],
+                                                                    real[:, 5])
+        self.size += n
+
+    def table(self, path: str) -> MotTable:
+        c = {name: column[:self.size] for name, column in self.columns.items()}
+        return MotTable(path=path, **c)
+
+
 def _read(path: str, kind: str) -> MotTable:
-    """Every row of a MOTChallenge file, checked cell by cell but not for meaning."""
+    """Every row of a MOTChallenge file, checked cell by cell but not for meaning. The file is
+    streamed line by line (lines end in LF, CRLF or CR), so memory follows the rows kept."""
+    strict_class = kind != "det"
     try:
         with (opening(path, "a MOTChallenge text file"),
               open(path, encoding="utf-8", newline="") as fh):
-            lines = fh.read().splitlines()
+            columns = _Columns(_line_bound(path))
+            lines: list[str] = []
+            numbers: list[int] = []
+            for number, raw in enumerate(fh, start=1):
+                line = raw.strip().lstrip("\ufeff")
+                if not line:
+                    continue
+                lines.append(line)
+                numbers.append(number)
+                if len(lines) == CHUNK:
+                    columns.add(*_chunk(lines, numbers, path, strict_class))
+                    lines, numbers = [], []
+            columns.add(*_chunk(lines, numbers, path, strict_class))
     except UnicodeDecodeError as err:
         raise OcctrackError(f"not a text file (byte {err.start} is not UTF-8)", path) from None
+    return columns.table(path)
 
-    strict_class = kind != "det"
-    frames: list[int] = []
-    ids: list[int] = []
-    classes: list[int] = []
-    numbers: list[int] = []
+
+def _chunk(lines: list[str], numbers: list[int], path: str,
+           strict_class: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of a chunk as (n, 4) whole numbers (frame, id, class, line) and (n, 6) reals (box,
+    score, visibility). numpy's C parser reads a chunk whose rows all have one layout and
+    pass every check (the files trackers write); any other chunk is read row by row by
+    `_row`, which accepts what TrackEval accepts and names the first bad line."""
+    if not lines:
+        return np.zeros((0, 4), dtype=np.int64), np.zeros((0, 6))
+    fast = _fast_chunk(lines, numbers, strict_class)
+    if fast is not None:
+        return fast
     reals: list[tuple] = []
-    for number, raw in enumerate(lines, start=1):
-        line = raw.strip().lstrip("\ufeff")
-        if not line:
-            continue
-        parts = _split(line)
-        if len(parts) < 6:
-            raise OcctrackError(f"expected at least 6 columns (frame, id, left, top, width, "
-                                f"height), found {len(parts)}: {line[:60]!r}", path, number)
-        values = []
-        for col, text in enumerate(parts[:9]):
-            try:
-                v = float(text)
-            except ValueError:
-                raise OcctrackError(f"column {col + 1} is not a number: {text!r}",
-                                    path, number) from None
-            if math.isnan(v) or math.isinf(v):
-                raise OcctrackError(f"column {col + 1} is {text}", path, number)
-            values.append(v)
-        frames.append(_whole(parts[0], values[0], "frame", 1, MAX_FRAME, path, number))
-        ids.append(_whole(parts[1], values[1], "id", MIN_ID, MAX_ID, path, number))
-        cls = -1
-        if len(values) > 7:
-            if strict_class:
-                cls = _whole(parts[7], values[7], "class", MIN_ID, MAX_ID, path, number)
-            elif values[7].is_integer() and MIN_ID <= values[7] <= MAX_ID:
-                cls = int(values[7])
-        classes.append(cls)
-        numbers.append(number)
-        reals.append((*values[2:6], values[6] if len(values) > 6 else 1.0,
-                      values[8] if len(values) > 8 else -1.0))
+    whole = [_row(line, number, path, strict_class, reals)
+             for line, number in zip(lines, numbers, strict=True)]
+    return np.array(whole, dtype=np.int64), np.array(reals, dtype=float)
 
-    arr = np.array(reals, dtype=float).reshape(-1, 6)
-    return MotTable(frame=np.array(frames, dtype=np.int64), id=np.array(ids, dtype=np.int64),
-                    box=arr[:, :4].copy(), score=arr[:, 4].copy(),
-                    cls=np.array(classes, dtype=np.int64), visibility=arr[:, 5].copy(),
-                    path=path, line=np.array(numbers, dtype=np.int64))
+
+def _fast_chunk(lines: list[str], numbers: list[int],
+                strict_class: bool) -> tuple[np.ndarray, np.ndarray] | None:
+    """`_chunk` by numpy.loadtxt, or None when a row needs `_row`'s reading or its message."""
+    comma = "," in lines[0]
+    if any(("," in line) != comma or line.endswith(",") for line in lines):
+        return None
+    try:
+        values = np.loadtxt(lines, delimiter="," if comma else None, ndmin=2, dtype=float,
+                            comments=None)
+    except ValueError:  # ragged rows, a cell that is not a number
+        return None
+    n, width = values.shape
+    if width < 6 or not np.isfinite(values[:, :9]).all():
+        return None
+    frame, ident = values[:, 0], values[:, 1]
+    whole_ok = ((frame == np.floor(frame)) & (frame >= 1) & (frame <= MAX_FRAME)
+                & (ident == np.floor(ident)) & (ident >= MIN_ID) & (ident <= MAX_ID))
+    cls = np.full(n, -1.0)
+    if width > 7:
+        c = values[:, 7]
+        integral = (c == np.floor(c)) & (c >= MIN_ID) & (c <= MAX_ID)
+        if strict_class:
+            whole_ok &= integral
+        cls = np.where(integral, c, -1.0)
+    if not whole_ok.all():
+        return None
+    whole = np.empty((n, 4), dtype=np.int64)
+    whole[:, 0], whole[:, 1], whole[:, 2] = frame, ident, cls
+    whole[:, 3] = numbers
+    reals = np.empty((n, 6))
+    reals[:, :4] = values[:, 2:6]
+    reals[:, 4] = values[:, 6] if width > 6 else 1.0
+    reals[:, 5] = values[:, 8] if width > 8 else -1.0
+    return whole, reals
+
+
+def _row(line: str, number: int, path: str, strict_class: bool, reals: list) -> tuple:
+    """One row's whole-number columns (frame, id, class, line number); its real columns (box,
+    score, visibility) are appended to `reals`."""
+    parts = _split(line)
+    if len(parts) < 6:
+        raise OcctrackError(f"expected at least 6 columns (frame, id, left, top, width, "
+                            f"height), found {len(parts)}: {line[:60]!r}", path, number)
+    values = []
+    for col, text in enumerate(parts[:9]):
+        try:
+            v = float(text)
+        except ValueError:
+            raise OcctrackError(f"column {col + 1} is not a number: {text!r}",
+                                path, number) from None
+        if math.isnan(v) or math.isinf(v):
+            raise OcctrackError(f"column {col + 1} is {text}", path, number)
+        values.append(v)
+    frame = _whole(parts[0], values[0], "frame", 1, MAX_FRAME, path, number)
+    ident = _whole(parts[1], values[1], "id", MIN_ID, MAX_ID, path, number)
+    cls = -1
+    if len(values) > 7:
+        if strict_class:
+            cls = _whole(parts[7], values[7], "class", MIN_ID, MAX_ID, path, number)
+        elif values[7].is_integer() and MIN_ID <= values[7] <= MAX_ID:
+            cls = int(values[7])
+    reals.append((*values[2:6], values[6] if len(values) > 6 else 1.0,
+                  values[8] if len(values) > 8 else -1.0))
+    return frame, ident, cls, number
 
 
 def read_mot(path: str | os.PathLike, kind: str = "det",
