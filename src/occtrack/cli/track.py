@@ -214,19 +214,39 @@ def run(args: argparse.Namespace) -> int:
               f"result has no tracks", file=sys.stderr)
     frames = max(length or 0, detections.num_frames)
     start = time.perf_counter()
-    result = Tracker(config).run(detections, frames, quiet=args.quiet,
-                                 desc=f"tracking ({config.occlusion})", classes=kitti)
+    tracker = Tracker(config)
+    desc = f"tracking ({config.occlusion})"
     if kitti:
+        result = tracker.run(detections, frames, quiet=args.quiet, desc=desc, classes=True)
         _write_kitti(args, config, result, source)
+        done, tracks = result.frames, result.num_tracks
     else:
-        from occtrack.io.mot import write_mot
-
-        write_mot(args.output, result.frame, result.id, result.box, result.confidence,
-                  overwrite=args.force)
+        done, tracks = _stream_mot(args, tracker.run_frames(detections, frames,
+                                                            quiet=args.quiet, desc=desc))
     if not args.quiet:
-        print(summary(result.frames, result.num_tracks, time.perf_counter() - start),
+        print(summary(done, tracks, time.perf_counter() - start),
               file=sys.stderr if args.output == "-" else sys.stdout)
     return 0
+
+
+def _stream_mot(args: argparse.Namespace, reports) -> tuple[int, int]:
+    """Write each frame's rows as it is tracked (frame by frame, ids in order: the order
+    `occtrack.io.mot.write_mot` sorts into), so a result of any length takes no memory; the
+    file is still whole or not at all. Returns the frames and the distinct tracks."""
+    import numpy as np
+
+    from occtrack.io.atomic import atomic_write
+    from occtrack.io.mot import mot_rows
+
+    frames, ids = 0, set()
+    with atomic_write(args.output, args.force) as fh:
+        for report in reports:
+            frames += 1
+            shown = report.tracks
+            ids.update(shown.ids.tolist())
+            fh.write(mot_rows(np.full(len(shown), report.frame), shown.ids, shown.boxes,
+                              shown.confidence))
+    return frames, len(ids)
 
 
 def _read(args: argparse.Namespace, config, gap: int, length: int | None):

@@ -428,10 +428,15 @@ def write_mot(path: str | os.PathLike, frame: np.ndarray, ids: np.ndarray, box: 
     score = np.ones(len(frame)) if score is None else score
     order = np.lexsort((ids, frame))
     with atomic_write(path, overwrite) as fh:
-        for i in order:
-            l, t, w, h = box[i]
-            fh.write(f"{int(frame[i])},{int(ids[i])},{l:.2f},{t:.2f},{w:.2f},{h:.2f},"
-                     f"{score[i]:.4f},-1,-1,-1\n")
+        for chunk in range(0, len(order), CHUNK):
+            rows = order[chunk:chunk + CHUNK]
+            fh.write(mot_rows(frame[rows], ids[rows], box[rows], score[rows]))
+
+
+def mot_rows(frame: np.ndarray, ids: np.ndarray, box: np.ndarray, score: np.ndarray) -> str:
+    """Result rows `frame,id,left,top,width,height,score,-1,-1,-1` as text, in the order given."""
+    return "".join(f"{int(f)},{int(i)},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{s:.4f},"
+                   f"-1,-1,-1\n" for f, i, b, s in zip(frame, ids, box, score, strict=True))
 
 
 def read_seqinfo(folder: str | os.PathLike) -> dict[str, int | str]:

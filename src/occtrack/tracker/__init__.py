@@ -5,7 +5,7 @@ from typing import TYPE_CHECKING, Any
 
 from occtrack.config import OCCLUSION_NAMES, TrackerConfig
 from occtrack.tracker.boxes import BOX_FORMATS, BoxFormat
-from occtrack.tracker.tracker import Tracker, TrackResult, Tracks
+from occtrack.tracker.tracker import FrameReport, Tracker, TrackResult, Tracks
 
 if TYPE_CHECKING:
     from occtrack.tracker.scan import ScanTracker, ScanTrackResult, ScanTracks
@@ -22,5 +22,5 @@ def __getattr__(name: str) -> Any:
         return getattr(scan, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
-__all__ = ["BOX_FORMATS", "OCCLUSION_NAMES", "BoxFormat", "ScanTrackResult", "ScanTracker",
-           "ScanTracks", "TrackResult", "Tracker", "TrackerConfig", "Tracks"]
+__all__ = ["BOX_FORMATS", "OCCLUSION_NAMES", "BoxFormat", "FrameReport", "ScanTrackResult",
+           "ScanTracker", "ScanTracks", "TrackResult", "Tracker", "TrackerConfig", "Tracks"]

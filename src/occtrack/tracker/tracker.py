@@ -76,7 +76,7 @@ class Tracks:
         confidence: (n,) probability that each box is a real object at that place: the
             object exists and its true box overlaps the reported one at IoU >= 0.5
             (`occtrack.tracker.confidence`), the 7th column of every result file; how well it
-            keeps its word is measured by `occtrack eval --calibration` (README).
+            keeps its word is measured by `occtrack eval --calibration` (docs/confidence.md).
         velocities: (n, 2) velocity of each box centre, px / s.
         detection_index: (n,) int, the index of the detection each object took this frame
             (into the boxes given to `update` / `step`), -1 for an object reported without one
@@ -155,6 +155,16 @@ class TrackResult:
         return len(np.unique(self.id))
 
 
+@dataclass(frozen=True)
+class FrameReport:
+    """One frame of `Tracker.run_frames`: its number (from 1), the tracks reported, and for
+    each the row of the MotTable whose box it took (-1: none)."""
+
+    frame: int
+    tracks: Tracks
+    detection_row: np.ndarray
+
+
 MIN_DT = 1e-6  # s: the shortest time between two frames
 REFRESH_NOISE = 10  # tracked frames between renewals of the learnt size noise
 EXPANSION_SIGMAS = 5.0
@@ -187,6 +197,7 @@ class Tracker:
         size, margin = np.asarray(c.image_size, dtype=float), c.border_margin
         self._centre = size / 2.0  # the focus of the camera's expansion (`_camera_motion`)
         self._border = np.stack([np.full(2, margin), size - margin], axis=-1)  # BoxMeasurement's
+        self.seconds_tracking = 0.0  # inside the steps of the last `run_frames`
         self.reset()
 
     def reset(self) -> None:
@@ -236,7 +247,7 @@ class Tracker:
 
         Returns:
             `Tracks`: ids, boxes (in `box_format`), existence, velocities, classes,
-            detection_index (into `boxes`; -1: none taken) and occluded, sorted by id.
+                detection_index (into `boxes`; -1: none taken) and occluded, sorted by id.
 
         Raises:
             ValueError: a bad box format, shape or value, scores or classes that do not
@@ -396,9 +407,40 @@ class Tracker:
         reads one from a file) or one array per frame, (M, 4) boxes left, top, width, height
         or (M, 5) boxes and scores. Every `frame_step`-th frame is tracked, starting with the
         first; in between, the last tracks are carried along their velocities. Frames are
-        read one at a time, so a long stream is never held in memory (only the result rows).
+        read one at a time, so a long stream is never held in memory (only the result rows;
+        `run_frames` hands them over a frame at a time instead).
         `classes` (a MotTable only): its `cls` column is each detection's class (`step`'s
         `classes`), as KITTI's types are (`occtrack.io.kitti`)."""
+        keys = ("frame", "id", "box", "r", "coast", "occ", "conf", "cls", "row")
+        rows: dict[str, list] = {k: [] for k in keys}
+        count = 0
+        for frame in self.run_frames(detections, num_frames, quiet, desc, classes):
+            count += 1
+            shown = frame.tracks
+            rows["frame"].append(np.full(len(shown), frame.frame))
+            rows["id"].append(shown.ids)
+            rows["box"].append(shown.boxes)
+            rows["r"].append(shown.existence)
+            rows["coast"].append(shown.coasting)
+            rows["occ"].append(shown.occluded)
+            rows["conf"].append(shown.confidence)
+            rows["cls"].append(shown.classes)
+            rows["row"].append(frame.detection_row)
+        seconds = self.seconds_tracking
+        if not count:
+            return TrackResult(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 4)),
+                               np.zeros(0), 0, seconds, np.zeros(0, bool), np.zeros(0, bool),
+                               np.zeros(0), np.zeros(0, int), np.zeros(0, int))
+        return TrackResult(*(np.concatenate(rows[k]) for k in ("frame", "id", "box", "r")),
+                           count, seconds, *(np.concatenate(rows[k])
+                                             for k in ("coast", "occ", "conf", "cls", "row")))
+
+    def run_frames(self, detections: MotTable | Iterable[npt.ArrayLike],
+                   num_frames: int | None = None, quiet: bool = True, desc: str = "tracking",
+                   classes: bool = False) -> Iterator[FrameReport]:
+        """`run`, one `FrameReport` a frame as it is tracked: what a writer streams to a file,
+        so that memory stays that of the scene however long the sequence.
+        `seconds_tracking` adds up the time spent inside the steps."""
         if isinstance(detections, str | bytes | os.PathLike):
             raise ValueError(f"Tracker.run takes detections, not a file name ({detections!r}):"
                              f" read the file first, e.g. occtrack.io.mot.read_detections("
@@ -412,15 +454,11 @@ class Tracker:
         elif total is None and hasattr(detections, "__len__"):
             total = len(detections)
         c = self.config
-        keys = ("frame", "id", "box", "r", "coast", "occ", "conf", "cls", "row")
-        rows: dict[str, list] = {k: [] for k in keys}
         tracks = None
-        seconds = 0.0
-        count = 0
+        self.seconds_tracking = 0.0
         frames = _frames(detections, num_frames, classes)
         for index, (boxes, scores, labels, source) in enumerate(progress(frames, total, desc,
                                                                          quiet)):
-            count += 1
             offset = index % c.frame_step
             start = time.perf_counter()
             if offset == 0:
@@ -432,23 +470,8 @@ class Tracker:
             else:
                 shown = tracks.moved(offset / c.fps)
                 row = np.full(len(shown), -1)
-            seconds += time.perf_counter() - start
-            rows["frame"].append(np.full(len(shown), index + 1))
-            rows["id"].append(shown.ids)
-            rows["box"].append(shown.boxes)
-            rows["r"].append(shown.existence)
-            rows["coast"].append(shown.coasting)
-            rows["occ"].append(shown.occluded)
-            rows["conf"].append(shown.confidence)
-            rows["cls"].append(shown.classes)
-            rows["row"].append(row.astype(np.int64))
-        if not count:
-            return TrackResult(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 4)),
-                               np.zeros(0), 0, seconds, np.zeros(0, bool), np.zeros(0, bool),
-                               np.zeros(0), np.zeros(0, int), np.zeros(0, int))
-        return TrackResult(*(np.concatenate(rows[k]) for k in ("frame", "id", "box", "r")),
-                           count, seconds, *(np.concatenate(rows[k])
-                                             for k in ("coast", "occ", "conf", "cls", "row")))
+            self.seconds_tracking += time.perf_counter() - start
+            yield FrameReport(index + 1, shown, row.astype(np.int64))
 
 
 def _frames(detections, num_frames: int | None, classes: bool = False
