@@ -306,7 +306,9 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
     """`read_detections`' checks on a table already read (from any format)."""
     width, height = image_size
     left, top, w, h = table.box.T
-    bad_size = (w <= 0) | (h <= 0) | (np.abs(table.box) > MAX_COORDINATE).any(axis=1)
+    bad_size = (w <= 0) | (h <= 0)
+    for column in (left, top, w, h):  # one column at a time: no (N, 4) temporary
+        bad_size |= np.abs(column) > MAX_COORDINATE
     outside = ~bad_size & ((left + w <= 0) | (top + h <= 0) | (left >= width) | (top >= height))
     score = table.score
     if score_range is not None:
@@ -349,7 +351,11 @@ def check_detections(table: MotTable, image_size: tuple[float, float], *,
     if clipped.any():
         notes.append(f"clipped {int(clipped.sum())} scores to [0, 1] (first at line "
                      f"{table.line[clipped][0]})")
-    table = dataclasses.replace(table, score=np.clip(score, 0.0, 1.0)).select(~skip)
+    if off.any() or score_range is not None:
+        table = dataclasses.replace(table, score=np.clip(score, 0.0, 1.0))
+    if skip.any():  # (else no copy: a long file's table is the largest thing in memory)
+        table = table.select(~skip)
+    del left, top, w, h, bad_size, outside, score, off, skip, clipped
     twins = exact_duplicates(table)
     if twins.any():
         first = int(np.flatnonzero(twins)[0])
@@ -367,13 +373,24 @@ def exact_duplicates(table: MotTable) -> np.ndarray:
     score and class): one detection written twice, which a tracker would take for two
     objects in the same place."""
     n = len(table)
-    if n < 2:
-        return np.zeros(n, dtype=bool)
-    keys = np.column_stack([table.frame, table.box, table.score, table.cls]).astype(float)
-    order = np.lexsort((np.arange(n), *keys.T[::-1]))
-    same = (keys[order][1:] == keys[order][:-1]).all(axis=1)
     twins = np.zeros(n, dtype=bool)
-    twins[order[1:][same]] = True
+    if n < 2:
+        return twins
+    # Whole frames at a time, a block of about CHUNK rows, so that a long file needs a few
+    # bytes a row here rather than copies of the table.
+    by_frame = np.argsort(table.frame, kind="stable")
+    ends = np.searchsorted(table.frame[by_frame], table.frame[by_frame[
+        np.arange(CHUNK, n, CHUNK)]], side="right")
+    for rows in np.split(by_frame, np.unique(ends)):
+        if len(rows) < 2:
+            continue
+        keys = [table.frame[rows], *table.box[rows].T, table.score[rows], table.cls[rows]]
+        order = np.lexsort(keys[::-1])  # stable: of equal rows, the earliest comes first
+        same = np.ones(len(rows) - 1, dtype=bool)
+        for key in keys:
+            column = key[order]
+            same &= column[1:] == column[:-1]
+        twins[rows[order[1:][same]]] = True
     return twins
 
 
