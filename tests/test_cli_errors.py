@@ -185,7 +185,7 @@ def test_bad_toml_and_non_utf8_settings(det, tmp_path, capsys):
 
 @pytest.mark.parametrize("failure,status,message", [
     (KeyboardInterrupt(), 130, "occtrack track: interrupted"),
-    (MemoryError(), 1, "occtrack track: error: cfg.toml: out of memory; lower the sizes"),
+    (MemoryError(), 1, "occtrack track: error: out of memory; the largest input is "),
     (UnicodeDecodeError("utf-8", b"\xff", 0, 1, "invalid start byte"), 1,
      "occtrack track: error: an input is not UTF-8 text"),
     (tomllib.TOMLDecodeError("Expected '='"), 1,
@@ -205,6 +205,26 @@ def test_every_failure_has_one_line_and_a_status(det, capsys, monkeypatch, failu
     with pytest.raises(type(failure)):
         main(["--debug", "track", str(det), "--image-size", "640x480", "--fps", "30",
               "-o", "r.txt"])
+
+
+def test_out_of_memory_names_the_largest_input_and_the_settings(det, capsys, monkeypatch,
+                                                                 tmp_path):
+    """Issue 38, kind 3: running out of memory names what the user gave that could cause it,
+    never settings that were not given."""
+    def fail(args):
+        raise MemoryError
+
+    monkeypatch.setattr(importlib.import_module("occtrack.cli.track"), "run", fail)
+    config = tmp_path / "cfg.toml"
+    config.write_text("occlusion = 'none'\n")
+    size = det.stat().st_size
+    assert track(det, "-o", str(tmp_path / "r.txt")) == 1
+    one_error_line(capsys, f"occtrack track: error: out of memory; the largest input is {det} "
+                           f"({size / 1e6:.0f} MB): split it; or give the run more memory")
+    assert track(det, "-o", str(tmp_path / "r.txt"), "--config", str(config)) == 1
+    one_error_line(capsys, f"occtrack track: error: out of memory; the largest input is {det} "
+                           f"({size / 1e6:.0f} MB): split it; or lower the sizes set in {config} "
+                           f"(capacity, max_labels, particles, ...); or give the run more memory")
 
 
 def test_occlusion_names_match_the_tracker():

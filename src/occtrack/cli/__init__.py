@@ -176,9 +176,11 @@ def _os_message(err: OSError) -> str:
     return f"{where}{what[:1].lower()}{what[1:]}" + (f"; {advice}" if advice else "")
 
 
-def explain(err: BaseException, config: str | None = None) -> str:
+def explain(err: BaseException, config: str | None = None,
+            largest_input: tuple[str, int] | None = None) -> str:
     """One line for a failure: where, what, and what to do. `config` is the settings file
-    the run was given, if any, the likely culprit of running out of memory."""
+    the run was given, if any, and `largest_input` (path, bytes) its largest input file: the
+    likely culprits of running out of memory."""
     if isinstance(err, OcctrackError):
         return str(err)
     if isinstance(err, ImportError):
@@ -195,11 +197,32 @@ def explain(err: BaseException, config: str | None = None) -> str:
     if isinstance(err, tomllib.TOMLDecodeError):
         return f"a settings file is not valid TOML: {err}"
     if isinstance(err, MemoryError):
-        where = f"{config}: " if config else ""
-        return (f"{where}out of memory; lower the sizes set in the configuration "
-                f"(capacity, max_labels, particles, ...) or give the run more memory")
+        causes = []
+        if largest_input is not None:
+            path, size = largest_input
+            causes.append(f"the largest input is {path} ({size / 1e6:.0f} MB): split it")
+        if config:
+            causes.append(f"lower the sizes set in {config} (capacity, max_labels, particles, "
+                          f"...)")
+        return "out of memory; " + "; or ".join(causes + ["give the run more memory"])
     return (f"internal error: {type(err).__name__}: {err}; this is a bug in occtrack, please "
             f"report it with the output of the same command run as occtrack --debug ...")
+
+
+def _largest_input(args: argparse.Namespace) -> tuple[str, int] | None:
+    """The largest existing file among the command's arguments (not its outputs), with its
+    size: what to name when memory runs out."""
+    found = []
+    for name, value in vars(args).items():
+        if name in ("output", "out", "out_dir", "figure", "animation", "json") or name[0] == "_":
+            continue
+        for item in value if isinstance(value, list | tuple) else [value]:
+            if isinstance(item, str | os.PathLike) and os.path.isfile(item):
+                found.append((os.path.getsize(item), str(item)))
+    if not found:
+        return None
+    size, path = max(found)
+    return path, size
 
 
 def _quiet_stdout() -> None:
@@ -255,5 +278,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.debug:
             raise
         config = getattr(args, "config", None)
-        print(f"{prog}: error: {explain(err, config and str(config))}", file=sys.stderr)
+        largest = _largest_input(args) if isinstance(err, MemoryError) else None
+        print(f"{prog}: error: {explain(err, config and str(config), largest)}",
+              file=sys.stderr)
         return BAD_INPUT
