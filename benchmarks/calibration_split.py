@@ -8,7 +8,7 @@ $OCCTRACK_DATA or ../shared/data/mot17). The reported boxes are scored as `occtr
 step) and split: boxes that took a detection, coasting boxes, and of those the ones within 3 %
 of the image border; per group the boxes, their mean confidence and the share right; and of the
 wrong detected boxes, how many lie on a true box at IoU 0.3 to 0.5 and how visible that person
-is. The README's "The confidence of a reported box" quotes these.
+is. docs/confidence.md quotes these.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ taken (`line->line`, -N meaning the method returns). Exits 1 unless every one of
 is taken, so a new branch without a test shows. Not CI: coverage's tracing slows the filter
 down; the whole run takes about 10 s. Needs coverage 7.6 or later (per-function JSON) and
 occtrack installed editable, so that the Python modules run from src/ and the kernels from the
-build (README, "Compiled kernels": `pip install --no-build-isolation -e ".[dev]"`).
+build (docs/development.md, "Working on the code": `pip install --no-build-isolation -e ".[dev]"`).
 """
 
 from __future__ import annotations

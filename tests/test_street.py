@@ -33,8 +33,8 @@ def test_calibrate_gives_back_the_detector(street):
 
 def test_calibrate_gives_back_the_detectors_memory():
     """The memory of detection of visible, tracked people on the demo's own street (seed 0,
-    the README's): its 95 % interval holds the memory the street was given (MOT17's, 0.485);
-    misses of people in view come in runs of about two frames, as on MOT17."""
+    docs/occlusion-models.md): its 95 % interval holds the memory the street was given
+    (MOT17's, 0.485); misses of people in view come in runs of about two frames, as on MOT17."""
     scene = street_scene(Street(), seed=0)
     cal = calibrate([Labelled("street", scene.truth, scene.detections, scene.image_size,
                               scene.fps, scene.frames)], seed=0)

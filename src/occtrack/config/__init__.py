@@ -57,7 +57,7 @@ class TrackerConfig:
     shows up near where it was lost (measurement-wise weighs a hit by the detection's escape
     only, and its long-hidden objects take the next person to appear there: on MOT17-04, -11
     and -05, 1, 8 and 22 identity jumps after a gap of more than 10 frames against 1, 5 and
-    11; README, "Real detections and the peers").
+    11; docs/benchmarks.md).
     """
 
     occlusion: str = "object-wise"  # none, object-wise or measurement-wise

@@ -458,7 +458,8 @@ def mot_rows(frame: np.ndarray, ids: np.ndarray, box: np.ndarray, score: np.ndar
 
 def read_seqinfo(folder: str | os.PathLike) -> dict[str, int | str]:
     """`seqinfo.ini` of a MOTChallenge sequence folder (or an .ini file itself, as KITTI's
-    `seqinfo/NNNN.ini`): name, imWidth, imHeight, seqLength, frameRate."""
+    `seqinfo/NNNN.ini`) as {"name", "width", "height", "length", "fps"}, read from its name,
+    imWidth, imHeight, seqLength and frameRate."""
     ini = Path(folder)
     if not (ini.suffix == ".ini" and ini.is_file()):
         ini = ini / "seqinfo.ini"

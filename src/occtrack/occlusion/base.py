@@ -69,6 +69,9 @@ class OcclusionTerms:
 
 
 class OcclusionModel(Protocol):
+    """The interface of an occlusion model: a `name`, and `terms(ctx)`, which returns each
+    component's `OcclusionTerms` (visible v_k, hidden q_k) from an `OcclusionContext`."""
+
     name: str
 
     def terms(self, ctx: OcclusionContext) -> OcclusionTerms: ...

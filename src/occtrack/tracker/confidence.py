@@ -18,7 +18,7 @@ it is too sure in a world drawn from the filter's own model
 (benchmarks/calibration_model_world.py). On MOT17 the exact form was too unsure while boxes
 cut by the image border kept a hidden edge no measurement pinned; since the border edge is
 measured through the aspect ratio and the censored update (`occtrack.models.box`) it is the
-calibrated one there too (README).
+calibrated one there too (docs/confidence.md).
 
 The overlap probability has no closed form (IoU is a ratio of piecewise-linear areas), so it
 is a Monte Carlo average over `DRAWS` fixed standard-normal draws, the same for every box and

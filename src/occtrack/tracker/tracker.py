@@ -170,7 +170,7 @@ REFRESH_NOISE = 10  # tracked frames between renewals of the learnt size noise
 EXPANSION_SIGMAS = 5.0
 """With `camera_expansion`: the camera's forward motion k moves the predictions only as far as
 the detections pin it, k (1 - (z sigma_k / k)^2)^+: none below z standard errors. 5 is the
-smallest of 3, 5 and 8 that keeps MOT17's FRCNN sequences within .005 HOTA (README)."""
+smallest of 3, 5 and 8 that keeps MOT17's FRCNN sequences within .005 HOTA (docs/benchmarks.md)."""
 
 
 class Tracker:

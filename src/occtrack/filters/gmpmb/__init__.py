@@ -62,7 +62,7 @@ this honest on real detections:
   prediction keeps spreading (its own motion, the camera's); taken by the old label, the next
   person to come out from behind the occluder would swap two identities. On a still camera the
   spread grows slowly and long occlusions are still bridged; on a moving one the camera's
-  uncertainty ends them sooner (README, "Real detections and the peers").
+  uncertainty ends them sooner (docs/occlusion-models.md, "On real detections").
 
 Then the children lighter than `prune_mass` are dropped; each Bernoulli keeps at most its
 `max_components_per_object` heaviest, rescaled so that its existence is unchanged (only the
