@@ -1,7 +1,7 @@
 """The demo's printed scores are the docs' (docs/occlusion-models.md), and on the demo's
-seed 0 every occlusion model keeps more identities through full occlusions than `none` with at least its IDF1 and MOTA
-(issue 26; `python benchmarks/bench_demo.py` prints seeds 0-4). (That the demo repeats byte
-for byte by seed, in fresh processes, is tests/test_determinism.py's.)"""
+seed 0 every occlusion model keeps more identities through full occlusions than `none` with at
+least its IDF1 and MOTA (issue 26; `python benchmarks/bench_demo.py` prints seeds 0-4). (That
+the demo repeats byte for byte by seed, in fresh processes, is tests/test_determinism.py's.)"""
 
 from __future__ import annotations
 
