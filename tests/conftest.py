@@ -81,3 +81,22 @@ def kitti_root() -> Path:
     data_missing("KITTI tracking data not found: no det_02/ and seqinfo/ in "
                  + " or ".join(str(root) for root in tried)
                  + " (../shared/data/kitti of the checkout, or kitti/ beside OCCTRACK_DATA)")
+
+
+def headless_chromium(tmp_path, *args: str):
+    """Debian's chromium run headless on `args` with a fresh profile in `tmp_path` (the
+    report page's test and the docs site's); skips, saying how to get it, where it is absent."""
+    import shutil
+    import subprocess
+
+    browser = shutil.which("chromium")
+    if browser is None:
+        pytest.skip("no browser: Debian's chromium is not installed (apt-get install -y "
+                    "chromium; .ci/run installs it where apt-get can)")
+    profile = tmp_path / f"profile-{len(list(tmp_path.iterdir()))}"
+    profile.mkdir()
+    return subprocess.run(
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync", f"--user-data-dir={profile}", *args],
+        capture_output=True, text=True, timeout=180, check=False)

@@ -11,14 +11,13 @@ import html
 import importlib.util
 import os
 import re
-import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from conftest import CHECKOUT
+from conftest import CHECKOUT, headless_chromium
 
 DOCS_EXTRA = ("mkdocs", "material", "mkdocstrings", "mkdocstrings_handlers.python")
 
@@ -62,20 +61,6 @@ def test_the_site_builds_strictly_without_a_warning(site):
         assert f'id="{name}"' in reference, f"the API reference has no entry for {name}"
 
 
-def chromium(tmp_path, *args: str) -> subprocess.CompletedProcess:
-    browser = shutil.which("chromium")
-    if browser is None:
-        pytest.skip("no browser: Debian's chromium is not installed (apt-get install -y "
-                    "chromium; .ci/run installs it where apt-get can)")
-    profile = tmp_path / f"profile-{len(list(tmp_path.iterdir()))}"
-    profile.mkdir()
-    return subprocess.run(
-        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-         "--no-first-run", "--disable-background-networking", "--disable-component-update",
-         "--disable-sync", f"--user-data-dir={profile}", *args],
-        capture_output=True, text=True, timeout=180, check=False)
-
-
 def headings(dom: str, level: int) -> list[str]:
     found = re.findall(rf"<h{level}\b[^>]*>(.*?)</h{level}>", dom, flags=re.S)
     return [" ".join(html.unescape(re.sub(r"<[^>]+>", " ", h)).replace("¶", "").split())
@@ -88,7 +73,7 @@ def test_chromium_finds_the_pages_headings(site, tmp_path, page, path):
     out, done = site
     assert done.returncode == 0, "the site did not build (see the strict build test)"
     url = (out / path).as_uri()
-    dom = chromium(tmp_path, "--dump-dom", url).stdout
+    dom = headless_chromium(tmp_path, "--dump-dom", url).stdout
     assert "<h1" in dom, f"Chromium drew no <h1> on {path}: {dom[:500]!r}"
     assert first_heading(page) in headings(dom, 1), (first_heading(page), headings(dom, 1))
     if page == "reference.md":
@@ -97,7 +82,7 @@ def test_chromium_finds_the_pages_headings(site, tmp_path, page, path):
             assert any(re.match(rf"{re.escape(name)}(?![\w.])", h) for h in entries), \
                 (name, entries)
     shot = tmp_path / "page.png"
-    chromium(tmp_path, f"--screenshot={shot}", "--window-size=1200,800", url)
+    headless_chromium(tmp_path, f"--screenshot={shot}", "--window-size=1200,800", url)
     assert shot.is_file(), f"Chromium wrote no screenshot of {path}"
     image = pytest.importorskip("PIL.Image", reason="reading the screenshot needs Pillow")
     with image.open(shot) as picture:

@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 
+from conftest import headless_chromium
 from occtrack.cli import main
 from occtrack.experiments import benchmark
 from occtrack.metrics.evaluate import gospa_per_frame
@@ -212,27 +211,13 @@ def test_bad_input_and_outputs_are_named(run, tmp_path, capsys):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
-def _chromium(tmp_path, *args: str) -> subprocess.CompletedProcess:
-    browser = shutil.which("chromium")
-    if browser is None:
-        pytest.skip("no browser: Debian's chromium is not installed (apt-get install -y "
-                    "chromium; .ci/run installs it where apt-get can)")
-    profile = tmp_path / f"profile-{len(list(tmp_path.iterdir()))}"
-    profile.mkdir()
-    return subprocess.run(
-        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-         "--no-first-run", "--disable-background-networking", "--disable-component-update",
-         "--disable-sync", f"--user-data-dir={profile}", *args],
-        capture_output=True, text=True, timeout=180, check=False)
-
-
 def test_the_page_in_headless_chromium(run, tmp_path):
     """Chromium draws the page (a screenshot that is not blank) and its DOM, after the script
     has run, holds the tables and a drawn frame viewer."""
     root, report, _ = run
     url = (root / "report.html").as_uri()
     shot = tmp_path / "report.png"
-    done = _chromium(tmp_path, f"--screenshot={shot}", "--window-size=1280,2000", url)
+    done = headless_chromium(tmp_path, f"--screenshot={shot}", "--window-size=1280,2000", url)
     assert shot.is_file(), done.stderr[-2000:]
     image = pytest.importorskip("PIL.Image", reason="reading the screenshot needs Pillow")
     with image.open(shot) as picture:
@@ -241,7 +226,7 @@ def test_the_page_in_headless_chromium(run, tmp_path):
     assert pixels.std() > 10, "the screenshot is blank"
     assert len(np.unique(pixels)) > 50
 
-    dom = _chromium(tmp_path, "--dump-dom", url).stdout
+    dom = headless_chromium(tmp_path, "--dump-dom", url).stdout
     assert 'data-ready="yes"' in dom, "the page's script did not run to its end"
     assert "Combined over 2 sequences" in dom and "SYN-B (1280x720, 10 fps, 40 frames)" in dom
     hota = report["combined"]["trackers"]["measurement-wise"]["hota"]
