@@ -17,14 +17,31 @@ from occtrack.tracker import Tracker
 
 
 @pytest.mark.parametrize("fps", [1e-300, 1e-3, 1e5, 1e300])
-def test_frame_rates_no_camera_has_are_refused_by_name(fps, tmp_path):
+def test_frame_rates_no_camera_has_are_refused_by_name(fps, tmp_path, capsys):
     with pytest.raises(ValueError, match=f"^fps must be between {MIN_FPS:g} and {MAX_FPS:g}"):
         TrackerConfig(fps=fps)
     det = tmp_path / "det.txt"
     det.write_text("1,-1,10,10,20,50,0.9\n")
-    assert main(["track", str(det), "-o", str(tmp_path / "r.txt"), "--image-size", "640x480",
-                 "--fps", repr(fps), "--quiet"]) != 0
+    for command in ("track", "calibrate"):  # a bad option value: a usage error, as --fps 0 is
+        files = [str(det)] if command == "track" else [str(det), str(det)]
+        with pytest.raises(SystemExit) as stop:
+            main([command, *files, "-o", str(tmp_path / "r.txt"), "--image-size", "640x480",
+                  "--fps", repr(fps), "--quiet"])
+        assert stop.value.code == 2
+        assert (f"occtrack {command}: error: argument --fps: {fps!r} must be between "
+                f"{MIN_FPS:g} and {MAX_FPS:g} frames a second") in capsys.readouterr().err
     assert not (tmp_path / "r.txt").exists()
+
+
+@pytest.mark.parametrize("size", ["200000x480", "640x100001"])
+def test_image_sizes_no_camera_has_are_a_bad_option_value(size, tmp_path, capsys):
+    det = tmp_path / "det.txt"
+    det.write_text("1,-1,10,10,20,50,0.9\n")
+    with pytest.raises(SystemExit) as stop:
+        main(["track", str(det), "-o", str(tmp_path / "r.txt"), "--image-size", size])
+    assert stop.value.code == 2
+    assert f"argument --image-size: {size}: an image side is at most 100000 px" in (
+        capsys.readouterr().err)
 
 
 @given(st.floats(MIN_FPS, MAX_FPS))

@@ -43,7 +43,7 @@ examples:
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    from occtrack.cli.arguments import positive_float, seed_int
+    from occtrack.cli.arguments import frame_rate, seed_int
     from occtrack.cli.track import image_size
 
     parser.add_argument("files", metavar="GT DET", nargs="+", type=Path,
@@ -57,7 +57,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "written")
     parser.add_argument("--image-size", type=image_size, metavar="WxH",
                         help="image size where there is no seqinfo.ini")
-    parser.add_argument("--fps", type=positive_float, help="frame rate where there is no "
+    parser.add_argument("--fps", type=frame_rate, help="frame rate where there is no "
                                                            "seqinfo.ini")
     parser.add_argument("--seed", type=seed_int, default=0,
                         help="seed of the bootstrap (default 0)")

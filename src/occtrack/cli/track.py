@@ -8,7 +8,7 @@ import re
 import sys
 import time
 
-from occtrack.cli.arguments import positive_float, positive_int, whole_number
+from occtrack.cli.arguments import frame_rate, positive_int, whole_number
 from occtrack.errors import OcctrackError
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
@@ -75,6 +75,11 @@ def image_size(text: str) -> tuple[float, float]:
     if not match or float(match[1]) <= 0 or float(match[2]) <= 0:
         raise argparse.ArgumentTypeError(f"{text!r} is not an image size; write WxH, "
                                          f"e.g. 1920x1080")
+    from occtrack.config import MAX_IMAGE_SIDE
+
+    if max(float(match[1]), float(match[2])) > MAX_IMAGE_SIDE:
+        raise argparse.ArgumentTypeError(f"{text}: an image side is at most "
+                                          f"{MAX_IMAGE_SIDE:g} px")
     return float(match[1]), float(match[2])
 
 
@@ -108,7 +113,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config", metavar="FILE", help="TOML file of tracker settings")
     parser.add_argument("--frame-step", type=positive_int, metavar="N", default=None,
                         help="track every N-th frame (default 1, or the config file's)")
-    parser.add_argument("--fps", type=positive_float, metavar="HZ", default=None,
+    parser.add_argument("--fps", type=frame_rate, metavar="HZ", default=None,
                         help="frame rate of the sequence (default: from seqinfo.ini)")
     parser.add_argument("--image-size", type=image_size, metavar="WxH", default=None,
                         help="image size in pixels (default: from seqinfo.ini)")

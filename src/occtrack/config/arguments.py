@@ -36,6 +36,21 @@ def positive_float(text: str) -> float:
 
 positive_float.__name__ = "positive number"
 
+
+def frame_rate(text: str) -> float:
+    """An argparse type: a frame rate a camera can have (`occtrack.config`'s MIN_FPS to
+    MAX_FPS), so that --fps 20000 is a bad option value, as --fps 0 is."""
+    from occtrack.config import MAX_FPS, MIN_FPS
+
+    value = positive_float(text)
+    if not MIN_FPS <= value <= MAX_FPS:
+        raise argparse.ArgumentTypeError(f"{text} must be between {MIN_FPS:g} and {MAX_FPS:g} "
+                                          f"frames a second")
+    return value
+
+
+frame_rate.__name__ = "frame rate"
+
 DAY_AT_30_FPS = 24 * 3600 * 30
 """Default bound on a run of empty frames: a day of video at the usual MOTChallenge rate."""
 
