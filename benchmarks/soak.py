@@ -3,7 +3,8 @@ sampled every 1,000 frames, and every id checked never to be given to two object
 
     python benchmarks/soak.py [--frames 100000] [--occlusion measurement-wise]
 
-The street (`occtrack demo`'s, 12 people in view) is simulated for 10,000 frames and played
+A crowd of random walkers (`occtrack.scenarios.pedestrians.Crowd`, 12 people in view; not
+`occtrack demo`'s street) is simulated for 10,000 frames and played
 again and again (people then appear and vanish at the seams, which births and deaths must
 absorb). Prints resident memory (MiB, from /proc/self/statm) after every 1,000 frames, its
 spread after the first 10 % (the warm-up) and frames per second.
