@@ -93,18 +93,25 @@ def _raise_terminated(signum: int, frame) -> None:
     raise Terminated(signum)
 
 
-def _catch_termination() -> None:
-    """Turn SIGTERM and SIGHUP into `Terminated` (main thread only: signal handlers can only
-    be set there, and a library caller's own handlers are left alone)."""
+@contextmanager
+def _catch_termination():
+    """Turn SIGTERM and SIGHUP into `Terminated` while a command runs, and put the handlers
+    back after it (main thread only: signal handlers can only be set there; a caller's own
+    handlers are left alone)."""
     import threading
 
-    if threading.current_thread() is not threading.main_thread():
-        return
-    _MAIN_PID[:] = [os.getpid()]
-    for name in ("SIGTERM", "SIGHUP"):
-        sig = getattr(signal, name, None)
-        if sig is not None and signal.getsignal(sig) in (signal.SIG_DFL, None):
-            signal.signal(sig, _raise_terminated)
+    replaced = {}
+    if threading.current_thread() is threading.main_thread():
+        _MAIN_PID[:] = [os.getpid()]
+        for name in ("SIGTERM", "SIGHUP"):
+            sig = getattr(signal, name, None)
+            if sig is not None and signal.getsignal(sig) in (signal.SIG_DFL, None):
+                replaced[sig] = signal.signal(sig, _raise_terminated)
+    try:
+        yield
+    finally:
+        for sig, handler in replaced.items():
+            signal.signal(sig, handler)
 
 EXIT_STATUS = f"""\
 exit status:
@@ -260,9 +267,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return USAGE
     prog = f"occtrack {args.command}"
-    _catch_termination()
     try:
-        with _warnings_as_lines(prog):
+        with _catch_termination(), _warnings_as_lines(prog):
             return int(args._run(args) or 0)
     except BrokenPipeError:
         _quiet_stdout()
