@@ -111,8 +111,6 @@ class _Columns:
     table's own, 80 bytes a row, never the file's text or a Python object a cell (which took
     16 times the file's size)."""
 
-    NAMES = ("frame", "id", "cls", "line", "box", "score", "visibility")
-
     def __init__(self, capacity: int | None):
         self.size = 0
         self.columns = self._empty(capacity or CHUNK)
