@@ -124,7 +124,15 @@ def test_kitti_refuses_a_stray_frame_number(tmp_path, capsys):
     assert main(["eval", str(pair / "gt.txt"), str(pair / "res.txt"),
                  "--protocol", "kitti"]) == 1
     err = capsys.readouterr().err
-    assert f"frame {HUGE} follows frame 19" in err
+    assert f"frame {HUGE} follows frame 19" in err and "raise --max-gap-frames" in err
+    # and the flag does raise the bound (the result's frames are then scored, none of them
+    # the ground truth's)
+    pair2 = _kitti_pair(tmp_path / "k2", 5000)
+    assert main(["eval", str(pair2 / "gt.txt"), str(pair2 / "res.txt"), "--protocol",
+                 "kitti", "--max-gap-frames", "100"]) == 1
+    assert "more than the 100 allowed" in capsys.readouterr().err
+    assert main(["eval", str(pair2 / "gt.txt"), str(pair2 / "res.txt"), "--protocol",
+                 "kitti", "--max-gap-frames", "10000", "--json"]) == 0
 
 
 @pytest.mark.parametrize("argv", [["--scans", "1000000000"], ["--duration", "1e12"],

@@ -353,7 +353,8 @@ def _run_kitti(args: argparse.Namespace, start: float) -> int:
     if args.frames is not None and args.frames < 1:
         raise OcctrackError(f"--frames must be at least 1, got {args.frames}")
     pairs = trackeval_kitti.sequence_pairs(args.gt, args.result)
-    report = trackeval_kitti.evaluate(pairs, classes, args.frames, args.calibration)
+    report = trackeval_kitti.evaluate(pairs, classes, args.frames, args.calibration,
+                                      args.max_gap_frames)
     for note in report["notes"]:
         print(f"occtrack eval: note: {note}", file=sys.stderr)
     if args.json:

@@ -262,13 +262,15 @@ def sequence_pairs(gt: str | Path, result: str | Path) -> list[tuple[str, Path, 
 
 
 def evaluate(pairs: list[tuple[str, Path, Path]], classes: tuple[str, ...] | list[str] = CLASSES,
-             frames: int | None = None, calibration: bool = False) -> dict:
+             frames: int | None = None, calibration: bool = False,
+             max_gap_frames: int = DAY_AT_30_FPS) -> dict:
     """Score each (name, ground truth, result) under KITTI's protocol: per class, each
     sequence's numbers (`KEYS`) and TrackEval's COMBINED_SEQ over them; with `calibration`,
     per class the reliability table (`Reliability`) of the result's score column (a box is
     right when matched at IoU >= 0.5 to a true box of its class), pooled over the sequences.
     A sequence's length is `frames`, else its layout's seqinfo or seqmap, else its last
-    frame + 1 in either file.
+    frame + 1 in either file; more than `max_gap_frames` empty frames in a row in a file is
+    refused (a stray frame number).
     Returns {"protocol": "kitti", "classes": {CLASS: {"sequences": {NAME: values},
     "combined": values, "calibration": table}}, "notes": [...]}."""
     from occtrack.io.kitti import read_kitti
@@ -283,7 +285,7 @@ def evaluate(pairs: list[tuple[str, Path, Path]], classes: tuple[str, ...] | lis
                 notes.append(f"{table.path}: {table.unknown()}, not scored")
         last = max(gt.num_frames, result.num_frames, 1)
         for table in (gt, result):
-            check_gaps(table, DAY_AT_30_FPS)
+            check_gaps(table, max_gap_frames)
         n = frames or sequence_length(gt_path) or last
         check_frames(gt, n)
         check_frames(result, n)
