@@ -25,7 +25,10 @@ from occtrack.errors import OcctrackError, opening
 from occtrack.io.atomic import atomic_write
 
 KINDS = ("det", "gt", "result")
-MAX_COORDINATE = 1e6  # px: no image is that large (occtrack.tracker.boxes.MAX_COORDINATE)
+MAX_COORDINATE = 1e6
+"""px: a box coordinate or size beyond this is no box of any image (`MAX_IMAGE_SIDE` is
+1e5); the filter's arithmetic is safe for everything within it. Files and the tracker's API
+(`occtrack.tracker.boxes`) both check it."""
 MAX_FRAME = 2**31 - 1
 MIN_ID, MAX_ID = -(2**31), 2**31 - 1
 

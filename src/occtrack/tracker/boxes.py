@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
+from occtrack.io.mot import MAX_COORDINATE
 from occtrack.tracker._tracker import _checked_ltwh
 
 BoxFormat = Literal["xyxy", "ltwh", "cxcywh"]
@@ -123,11 +124,6 @@ def check_time(value: object, what: str) -> float:
     if not np.isfinite(value):
         raise ValueError(f"{what} must be a finite number of seconds, not {value}")
     return value
-
-
-MAX_COORDINATE = 1e6
-"""px: a box coordinate or size beyond this is no box of any image (`MAX_IMAGE_SIDE` is
-1e5); the filter's arithmetic is safe for everything within it."""
 
 
 def checked_frame(boxes: object, scores: object) -> np.ndarray | None:
