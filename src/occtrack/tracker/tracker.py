@@ -157,12 +157,14 @@ class TrackResult:
 
 @dataclass(frozen=True)
 class FrameReport:
-    """One frame of `Tracker.run_frames`: its number (from 1), the tracks reported, and for
-    each the row of the MotTable whose box it took (-1: none)."""
+    """One frame of `Tracker.run_frames`: its number (from 1), the tracks reported, for each
+    the row of the MotTable whose box it took (-1: none), and the seconds spent inside the
+    tracker on it (the step, or carrying the tracks between steps)."""
 
     frame: int
     tracks: Tracks
     detection_row: np.ndarray
+    seconds: float
 
 
 MIN_DT = 1e-6  # s: the shortest time between two frames
@@ -197,7 +199,6 @@ class Tracker:
         size, margin = np.asarray(c.image_size, dtype=float), c.border_margin
         self._centre = size / 2.0  # the focus of the camera's expansion (`_camera_motion`)
         self._border = np.stack([np.full(2, margin), size - margin], axis=-1)  # BoxMeasurement's
-        self.seconds_tracking = 0.0  # inside the steps of the last `run_frames`
         self.reset()
 
     def reset(self) -> None:
@@ -413,9 +414,10 @@ class Tracker:
         `classes`), as KITTI's types are (`occtrack.io.kitti`)."""
         keys = ("frame", "id", "box", "r", "coast", "occ", "conf", "cls", "row")
         rows: dict[str, list] = {k: [] for k in keys}
-        count = 0
+        count, seconds = 0, 0.0
         for frame in self.run_frames(detections, num_frames, quiet, desc, classes):
             count += 1
+            seconds += frame.seconds
             shown = frame.tracks
             rows["frame"].append(np.full(len(shown), frame.frame))
             rows["id"].append(shown.ids)
@@ -426,7 +428,6 @@ class Tracker:
             rows["conf"].append(shown.confidence)
             rows["cls"].append(shown.classes)
             rows["row"].append(frame.detection_row)
-        seconds = self.seconds_tracking
         if not count:
             return TrackResult(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 4)),
                                np.zeros(0), 0, seconds, np.zeros(0, bool), np.zeros(0, bool),
@@ -439,8 +440,7 @@ class Tracker:
                    num_frames: int | None = None, quiet: bool = True, desc: str = "tracking",
                    classes: bool = False) -> Iterator[FrameReport]:
         """`run`, one `FrameReport` a frame as it is tracked: what a writer streams to a file,
-        so that memory stays that of the scene however long the sequence.
-        `seconds_tracking` adds up the time spent inside the steps."""
+        so that memory stays that of the scene however long the sequence."""
         if isinstance(detections, str | bytes | os.PathLike):
             raise ValueError(f"Tracker.run takes detections, not a file name ({detections!r}):"
                              f" read the file first, e.g. occtrack.io.mot.read_detections("
@@ -455,7 +455,6 @@ class Tracker:
             total = len(detections)
         c = self.config
         tracks = None
-        self.seconds_tracking = 0.0
         frames = _frames(detections, num_frames, classes)
         for index, (boxes, scores, labels, source) in enumerate(progress(frames, total, desc,
                                                                          quiet)):
@@ -470,8 +469,8 @@ class Tracker:
             else:
                 shown = tracks.moved(offset / c.fps)
                 row = np.full(len(shown), -1)
-            self.seconds_tracking += time.perf_counter() - start
-            yield FrameReport(index + 1, shown, row.astype(np.int64))
+            yield FrameReport(index + 1, shown, row.astype(np.int64),
+                              time.perf_counter() - start)
 
 
 def _frames(detections, num_frames: int | None, classes: bool = False
