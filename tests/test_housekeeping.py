@@ -41,7 +41,10 @@ class FixedTerms:
 
 
 def make(occlusion=None, **settings) -> GaussianMixturePMB:
-    config = TrackerConfig(**{"capacity": 16, "max_labels": 4, **NO_MERGING, **settings})
+    """A filter on the Gaussian edge likelihood (no tail, tests/test_edge_tail.py has it), so
+    that the expected numbers below are the Gaussian's."""
+    config = TrackerConfig(**{"capacity": 16, "max_labels": 4, "tail_weight": 0.0,
+                              **NO_MERGING, **settings})
     return GaussianMixturePMB(config, occlusion or NoOcclusion())
 
 

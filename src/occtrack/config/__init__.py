@@ -84,6 +84,14 @@ class TrackerConfig:
 
     # lengths below are in units of the box's own height h (h of the component's mean box)
     edge_noise: float = 0.069  # std of each measured box edge, h (12 px at h = 175 px)
+    # a detection's edges are Gaussian about the prediction with weight 1 - tail_weight, and
+    # tail_scale times as spread with weight tail_weight: the few boxes that jump far (an
+    # approaching car, a half-hidden person's visible part) stay the track's rather than
+    # starting a twin (occtrack.models.edge_tail); the weight is learnt while tracking, this
+    # its prior (0: a Gaussian, as before)
+    tail_weight: float = 0.05
+    tail_scale: float = 3.0
+    learn_tail_weight: bool = False
     border_margin: float = 1.0  # an edge this close to the border is unmeasured, px
     aspect_prior: bool = True  # an axis the border cuts takes its half-size from the other
     # through the aspect ratio of the whole detections so far (occtrack.models.aspect)
@@ -252,6 +260,11 @@ class TrackerConfig:
         for name, value in probabilities.items():
             if not (0.0 <= value <= 1.0):
                 raise ValueError(f"{name} must be a probability in [0, 1], not {value}")
+        if not 0.0 <= self.tail_weight <= 0.5:
+            raise ValueError(f"tail_weight must be in [0, 0.5] (the tail never the likelier "
+                             f"explanation), not {self.tail_weight}")
+        if not (math.isfinite(self.tail_scale) and self.tail_scale > 1):
+            raise ValueError(f"tail_scale must be a number above 1, not {self.tail_scale}")
         if not self.identity_spread > 0:
             raise ValueError(f"identity_spread must be a positive number of half-sizes (inf: "
                              f"never), not {self.identity_spread}")

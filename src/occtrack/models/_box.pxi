@@ -44,11 +44,17 @@ cdef bint _every_edge_measured_c(const b8* observed, Py_ssize_t M) noexcept nogi
 
 
 def _loglik_pairs(object zhat, object S, object z, object observed, object k, object j,
-                  object log_phi, object log_peak):
+                  object log_phi, object log_peak, double tail_weight=0.0,
+                  double tail_scale=1.0, object d2_out=None, object m_out=None,
+                  object tail_of=None):
     """log N of the measured edges of z_j under component k, per pair, plus the log
     probability log_phi[k, c] + log_peak[k] of each edge on the border, c the edge's column
     among the censored ones (`_censored(observed)`, in (axis, low or high) order); S^-1 and
-    the log-determinants in closed form per component and axis, once."""
+    the log-determinants in closed form per component and axis, once. With a tail weight eps
+    > 0, plus the heavy tail's log(1 - eps + eps kappa^-m exp(d^2 (1 - kappa^-2) / 2))
+    (`models.edge_tail`), d^2 the Mahalanobis distance of the m measured edges, for the
+    components where tail_of (K,) is True (None: all); d2_out and m_out (E,), when given,
+    receive d^2 and m."""
     cdef const f64* zh = doubles(zhat, 3, "zhat")
     cdef const f64* Sp = doubles(S, 4, "S")
     cdef const f64* zp = doubles(z, 3, "z")
@@ -68,8 +74,24 @@ def _loglik_pairs(object zhat, object S, object z, object observed, object k, ob
     cdef i64 count = 0
     cdef Py_ssize_t i, axis, side, e
     cdef i64 ke, je
-    cdef double a, b, c, r0, r1, total
+    cdef double a, b, c, r0, r1, total, d2, m, x, y
     cdef bint o0, o1
+    cdef f64* d2p = NULL
+    cdef f64* mp = NULL
+    if d2_out is not None:
+        d2p = <f64*>doubles(d2_out, 1, "d2_out")
+        mp = <f64*>doubles(m_out, 1, "m_out")
+        length(d2_out, dim(k, 0), "d2_out")
+        length(m_out, dim(k, 0), "m_out")
+    cdef bint tail = tail_weight > 0.0
+    cdef const b8* tail_ok = NULL
+    if tail_of is not None:
+        tail_ok = booleans(tail_of, 1, "tail_of")
+        length(tail_of, dim(zhat, 0), "tail_of")
+    cdef double log_keep = log1p(-tail_weight) if tail else 0.0
+    cdef double log_weight = log(tail_weight) if tail else 0.0
+    cdef double log_scale = log(tail_scale) if tail else 0.0
+    cdef double stretch = 0.5 * (1.0 - 1.0 / (tail_scale * tail_scale)) if tail else 0.0
     _censored_c(o, M, censored)
     for axis in range(2):
         for side in range(2):
@@ -96,6 +118,8 @@ def _loglik_pairs(object zhat, object S, object z, object observed, object k, ob
     for e in range(E):
         ke, je = kp[e], jp[e]
         total = 0.0
+        d2 = 0.0
+        m = 0.0
         for axis in range(2):
             a = Sp[(ke * 2 + axis) * 4]
             b = Sp[(ke * 2 + axis) * 4 + 1]
@@ -104,18 +128,31 @@ def _loglik_pairs(object zhat, object S, object z, object observed, object k, ob
             r0 = zp[(je * 2 + axis) * 2] - zh[(ke * 2 + axis) * 2]
             r1 = zp[(je * 2 + axis) * 2 + 1] - zh[(ke * 2 + axis) * 2 + 1]
             if o0 and o1:
-                total += (c * r0 * r0 - 2.0 * b * r0 * r1 + a * r1 * r1) / (a * c - b * b) + (
-                    log_det[ke * 2 + axis])
+                x = (c * r0 * r0 - 2.0 * b * r0 * r1 + a * r1 * r1) / (a * c - b * b)
+                d2 += x
+                m += 2.0
+                total += x + log_det[ke * 2 + axis]
                 continue
             if o0:
+                d2 += r0 * r0 / a
+                m += 1.0
                 total += r0 * r0 / a + log_a[ke * 2 + axis]
             else:
                 total -= 2.0 * (phi[ke * width + column[axis * 2]] + peak[ke])
             if o1:
+                d2 += r1 * r1 / c
+                m += 1.0
                 total += r1 * r1 / c + log_c[ke * 2 + axis]
             else:
                 total -= 2.0 * (phi[ke * width + column[axis * 2 + 1]] + peak[ke])
         out[e] = -0.5 * total
+        if tail and (tail_ok == NULL or tail_ok[ke]):  # log(e^y + e^x), the larger taken out
+            x = log_weight - m * log_scale + stretch * d2
+            y = log_keep
+            out[e] += (x if x > y else y) + log1p(exp(-fabs(x - y)))
+        if d2p != NULL:
+            d2p[e] = d2
+            mp[e] = m
     return out_
 
 

@@ -16,10 +16,10 @@ to the last bit. Kernels that call kernels call the `cdef` (`_c`) versions.
 """
 
 cimport numpy as cnp
-from libc.math cimport M_PI, asin, atan2, erfc, exp, fabs, hypot, log, sqrt
+from libc.math cimport M_PI, asin, atan2, erfc, exp, fabs, hypot, log, log1p, sqrt
 
 from occtrack._arrays cimport (argsort_stable, b8, booleans, dim, doubles, f64, i64, integers,
-                               new_booleans, new_doubles, new_integers, zero_booleans,
+                               length, new_booleans, new_doubles, new_integers, zero_booleans,
                                zero_doubles, zero_integers)
 from occtrack.models._highway_sensor cimport _both_orders_c, _end_term_c, _ndtr_c, _near_c
 from occtrack.models._scan_geometry cimport (Window, beam_direction, beam_window_c, near_range_c,

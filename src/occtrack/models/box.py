@@ -47,6 +47,7 @@ from occtrack.models._models import (  # noqa: F401 (_beyond_update, _censored, 
     _update_rows,
 )
 from occtrack.models.aspect import AspectPrior
+from occtrack.models.edge_tail import EdgeTail
 
 H_EDGES = np.array([[1.0, 0.0, -1.0], [1.0, 0.0, 1.0]])
 MIN_HEIGHT = 4.0  # px: the scale of a degenerate box
@@ -92,7 +93,7 @@ class BoxMeasurement:
     def __init__(self, image_size: tuple[float, float], edge_noise: float = 0.069,
                  border_margin: float = 1.0, aspect: AspectPrior | None = None,
                  clutter_rate: float = 5.0, score_floor: float = 0.05,
-                 clutter_score_power: float = 2.0):
+                 clutter_score_power: float = 2.0, tail: EdgeTail | None = None):
         self.image_size = np.asarray(image_size, dtype=float)
         self.region_size = self.image_size  # the filter's survival region: the image
         self.clutter_rate = float(clutter_rate)
@@ -103,6 +104,8 @@ class BoxMeasurement:
         # a learnt score term (`models.score_model.ScoreLearner`) in place of score^-power
         self.score_model = None
         self.aspect = aspect
+        self.tail = tail  # a heavy tail of the edges' likelihood (`models.edge_tail`); None: none
+        self._labelled: np.ndarray | None = None  # its components (`tracked_components`)
         W, H = self.image_size
         self._border = np.array([[self.border_margin, W - self.border_margin],
                                  [self.border_margin, H - self.border_margin]])
@@ -155,9 +158,13 @@ class BoxMeasurement:
 
     def loglik(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                observed: np.ndarray) -> np.ndarray:
-        """log p(z_j | component k) for all pairs, (K, M), censored edges included."""
+        """log p(z_j | component k) for all pairs, (K, M), censored edges and the tail
+        included."""
         zhat, S, _ = gaussian.innovation(means, covs, self.H, self.R(means))
         out = gaussian.loglik_from_innovation(zhat, S, z, observed)
+        if self.tail is not None and out.size:
+            k, j = np.divmod(np.arange(out.size), len(z))
+            out = out + self.tail.correction(zhat, S, z, observed, k, j).reshape(out.shape)
         if observed.all() or len(means) == 0:
             return out
         sd = np.sqrt(np.diagonal(S, axis1=-2, axis2=-1))
@@ -198,16 +205,42 @@ class BoxMeasurement:
         """log p(z_j | component k) of the pairs (k[e], j[e]) only, censored edges included:
         the numbers `loglik` gives for those pairs."""
         k, j = np.asarray(k, dtype=np.int64), np.asarray(j, dtype=np.int64)
+        tail = self.tail
+        extra = ()
+        if tail is not None:  # the heavy tail, added by the kernel (`models.edge_tail`)
+            d2, m = np.empty(len(k)), np.empty(len(k))
+            labelled = self._labelled
+            if labelled is not None and len(labelled) != len(zhat):
+                labelled = None  # (not this frame's components: the tail for every one)
+            extra = (tail.weight, tail.scale, d2, m, labelled)
         if _every_edge_measured(observed):
-            return _loglik_pairs(zhat, S, z, observed, k, j, np.zeros((len(zhat), 0)),
-                                 np.zeros(len(zhat)))
-        # log P(edge beyond the border) of every component, as in `loglik`, on the edges
-        # (axis, low or high) that some detection has on the border only
-        W, H = self.image_size
-        log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
-        scores = _beyond_scores(zhat, S, self.border_margin, W - self.border_margin,
-                                H - self.border_margin, observed)
-        return _loglik_pairs(zhat, S, z, observed, k, j, _log_ndtr(scores), log_peak)
+            out = _loglik_pairs(zhat, S, z, observed, k, j, np.zeros((len(zhat), 0)),
+                                np.zeros(len(zhat)), *extra)
+        else:
+            # log P(edge beyond the border) of every component, as in `loglik`, on the edges
+            # (axis, low or high) that some detection has on the border only
+            W, H = self.image_size
+            log_peak = -0.5 * np.log(2.0 * np.pi * self.noise_std(means) ** 2)
+            scores = _beyond_scores(zhat, S, self.border_margin, W - self.border_margin,
+                                    H - self.border_margin, observed)
+            out = _loglik_pairs(zhat, S, z, observed, k, j, _log_ndtr(scores), log_peak,
+                                *extra)
+        if tail is not None:
+            tail.remember(k, j, d2, m)
+            self._labelled = None
+        return out
+
+    def tracked_components(self, labelled: np.ndarray) -> None:
+        """The filter's components of tracked objects, `labelled` (K,) bool, for the next
+        `loglik_pairs`: only theirs take the heavy tail (`models.edge_tail`)."""
+        self._labelled = np.ascontiguousarray(labelled, dtype=bool)
+
+    def learn_association(self, label: np.ndarray, taken: np.ndarray, confirmed: np.ndarray,
+                          dt: float) -> None:
+        """Learn from the detections the confirmed tracks took this frame (the tail's
+        weight, `models.edge_tail`)."""
+        if self.tail is not None:
+            self.tail.learn(label, taken, confirmed, dt)
 
     def update_edges(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                      observed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

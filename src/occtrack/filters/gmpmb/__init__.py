@@ -81,7 +81,10 @@ likelihoods, the sums L_ij and loopy BP (cluster by cluster, `lbp_sparse`) cost 
 that can interact cost. A pair outside the gate has a likelihood below e^(-gate_sigmas^2 / 2)
 of the component's best (with the default 9, e^-40: times the largest ratio of a component's
 peak density to the clutter density, about 1e6, still far below `prune_mass` for any child it
-could give). An association edge with L_ij < EDGE_FLOOR miss_i w_new_j cannot reach
+could give). The box model's heavy tail (`models.edge_tail`, for tracked objects' components)
+is cut at the same gate: beyond it lie pairs more than gate_sigmas / tail_scale (3) of the
+tail's standard deviations apart, whose share of the detections is what the tail's weight is
+not meant to explain. An association edge with L_ij < EDGE_FLOOR miss_i w_new_j cannot reach
 p_hit_ij = EDGE_FLOOR (1e-9), so its hit children fall below `prune_mass` whatever loopy BP
 says; leaving such edges out splits a crowd's graph into the clusters that really compete.
 `gating = false` computes every pair and keeps every edge, to check that nothing moves
@@ -155,6 +158,7 @@ from occtrack.filters.gmpmb.weights import (
 from occtrack.models.aspect import AspectPrior
 from occtrack.models.birth import EdgeBirths
 from occtrack.models.box import BoxMeasurement
+from occtrack.models.edge_tail import EdgeTail
 from occtrack.models.markov import TwoStateMarkov
 from occtrack.models.motion import ConstantVelocity
 from occtrack.occlusion.base import OcclusionContext, OcclusionModel
@@ -179,7 +183,10 @@ class GaussianMixturePMB:
         if measurement is None:
             measurement = BoxMeasurement(c.image_size, c.edge_noise, c.border_margin,
                                          AspectPrior() if c.aspect_prior else None,
-                                         c.clutter_rate, c.score_floor, c.clutter_score_power)
+                                         c.clutter_rate, c.score_floor, c.clutter_score_power,
+                                         EdgeTail(c.tail_weight, c.tail_scale,
+                                                  learn=c.learn_tail_weight)
+                                         if c.tail_weight > 0 else None)
         self.measurement = measurement
         self.birth_model = births  # None: the box births (edges of the image, learnt sizes)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
@@ -473,6 +480,9 @@ class GaussianMixturePMB:
         self.clutter_probability = np.divide(marg.p_new * share, w_new,
                                              out=np.zeros(M), where=w_new > 0)
         self._count_detections(slots, s_row, s_col, marg.p_hit)
+        learn = getattr(self.measurement, "learn_association", None)
+        if learn is not None:  # (what a measurement model learns from the detections taken)
+            learn(label, self.slot_detection, self.confirmed(), self.dt)
 
         # children: one miss child per component, then one hit child per pair
         children = _children(mass, miss, rows, hit, pj, edge_of_pair, strong, marg.p_hit,
@@ -520,6 +530,9 @@ class GaussianMixturePMB:
         n, M = len(mean), len(z)
         c = self.config
         zhat, S = self.measurement.innovation(mean, cov)
+        tracked = getattr(self.measurement, "tracked_components", None)
+        if tracked is not None:  # (optional: `interfaces`)
+            tracked(rows < A)
         if not c.gating or n * M <= DENSE_PAIRS:
             pk, pj, cand = _all_pairs(n, M, rows, A)
             loglik = self.measurement.loglik_pairs(mean, zhat, S, z, observed, pk, pj)

@@ -10,6 +10,13 @@ model's frame (`region_size`: components whose centre leaves [0, W] x [0, H] tak
 `exit_survival`). A step's measurements `z` are whatever the model gives meaning to (box edges
 (M, 2, 2), segments of a scan); the filter only takes `len(z)` and hands `z` back to the model,
 and to the occlusion model through `OcclusionContext.measurements`.
+
+Two methods are optional (the filter calls them where the model has them):
+`tracked_components(labelled)` before a frame's likelihoods, with `labelled` (K,) bool marking
+the components of tracked objects (the rest are the Poisson part), for a model whose likelihood
+differs between them; and `learn_association(label, taken, confirmed, dt)` after the frame's
+association, for a model that learns from the detections the tracks took (the box model's heavy
+tail does both, `occtrack.models.edge_tail`).
 """
 
 from __future__ import annotations
