@@ -206,6 +206,33 @@ def test_clusters_are_connected_components_of_the_pairs():
     assert cluster.shape == (4,)
 
 
+def test_clusters_are_scipys_connected_components_numbered_alike():
+    """The compiled union-find against scipy.sparse.csgraph.connected_components on 300 random
+    bipartite graphs (isolated nodes included): the same count and the same label per pair,
+    numbered by each component's lowest node."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        n, m = (int(v) for v in rng.integers(1, 40, 2))
+        pairs = sorted({(int(rng.integers(n)), int(rng.integers(m)))
+                        for _ in range(int(rng.integers(0, 80)))})
+        rows = np.array([p[0] for p in pairs], dtype=np.int64)
+        cols = np.array([p[1] for p in pairs], dtype=np.int64)
+        graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, n + cols)),
+                           shape=(n + m, n + m))
+        count, node = connected_components(graph, directed=False)
+        got_count, got = lbp_module.clusters_of(rows, cols, n, m)
+        assert got_count == count
+        np.testing.assert_array_equal(got, node[rows])
+
+
+def test_a_pair_outside_the_graph_is_refused():
+    with pytest.raises(IndexError, match="outside 2 x 3"):
+        lbp_module.clusters_of(np.array([0, 2]), np.array([0, 0]), 2, 3)
+
+
 def test_clusters_from_exactly_cluster_min_pairs_and_exact_fixed_points():
     """256 separate pairs (CLUSTER_MIN_PAIRS): 256 clusters, each a one-to-one problem whose
     messages stop changing at the second iteration. With tol 0 a change of 0 is not below

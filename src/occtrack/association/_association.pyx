@@ -180,3 +180,52 @@ def _marginals(rows, cols, ratio, grouped, order, w_new, Py_ssize_t n):
     length(grouped, E, "grouped")
     length(order, E, "order")
     return _marginals_new(r, k, q, g, o, w, E, n, dim(w_new, 0))
+
+
+cdef inline i64 _root(i64* parent, i64 x) noexcept nogil:
+    """The root of x's set, halving the path on the way."""
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+def _clusters(rows, cols, Py_ssize_t n, Py_ssize_t m):
+    """`clusters_of` by union-find: (count, cluster of each pair) over the n + m nodes
+    (objects 0..n-1, measurements n..n+m-1), components numbered by their lowest node as
+    scipy's `connected_components` numbers them (every node, in no pair or not, is one)."""
+    cdef const i64* r = integers(rows, 1, "rows")
+    cdef Py_ssize_t E = dim(rows, 0)
+    cdef const i64* k = integers(cols, 1, "cols")
+    length(cols, E, "cols")
+    cdef Py_ssize_t N = n + m, e, x
+    cdef i64 a, b
+    for e in range(E):
+        if not (0 <= r[e] < n and 0 <= k[e] < m):
+            raise IndexError(f"pair {e} ({r[e]}, {k[e]}) lies outside {n} x {m}")
+    parent_ = new_integers(1, N)
+    label_ = new_integers(1, N)
+    cdef i64* parent = idata(parent_)
+    cdef i64* label = idata(label_)
+    for x in range(N):
+        parent[x] = x
+        label[x] = -1
+    for e in range(E):
+        a = _root(parent, r[e])
+        b = _root(parent, n + k[e])
+        if a != b:  # the lower root stays the root
+            if a < b:
+                parent[b] = a
+            else:
+                parent[a] = b
+    cdef i64 count = 0
+    for x in range(N):
+        a = _root(parent, x)
+        if label[a] < 0:
+            label[a] = count
+            count += 1
+    out_ = new_integers(1, E)
+    cdef i64* out = idata(out_)
+    for e in range(E):
+        out[e] = label[_root(parent, r[e])]
+    return int(count), out_

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from occtrack.association._association import (  # the compiled kernels
+    _clusters,
     _iterate_clusters,
     _marginals,
     _one_cluster,
@@ -125,14 +126,11 @@ CLUSTER_MIN_PAIRS = 256  # fewer pairs: one cluster, as the dense form would sto
 
 def clusters_of(rows: np.ndarray, cols: np.ndarray, n: int, m: int) -> tuple[int, np.ndarray]:
     """(count, cluster of each pair): connected components of the bipartite graph whose
-    edges are the pairs (rows[e], cols[e])."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, n + cols)),
-                       shape=(n + m, n + m))
-    count, node = connected_components(graph, directed=False)
-    return count, node[rows]
+    edges are the pairs (rows[e], cols[e]), over all n + m nodes, numbered by their lowest
+    node (as scipy.sparse.csgraph.connected_components numbers them; a union-find compiled in
+    `_clusters`: building scipy's sparse graph cost more than the whole of loopy BP)."""
+    return _clusters(np.ascontiguousarray(rows, dtype=np.int64),
+                     np.ascontiguousarray(cols, dtype=np.int64), int(n), int(m))
 
 
 def lbp_sparse(rows: np.ndarray, cols: np.ndarray, w_hit: np.ndarray, w_miss: np.ndarray,
