@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -88,8 +89,14 @@ def main(argv: list[str] | None = None) -> int:
     unknown = [n for n in names if n not in GRIDS]
     if unknown or len(args.sets) < 2:
         parser.error(f"unknown setting {unknown[0]}" if unknown else "give two sets or more")
+    if args.json and args.json.exists():
+        parser.error(f"{args.json} exists; give a new file name")
     from occtrack import TrackerConfig
 
+    for root in args.sets:  # (checked before the first long run)
+        if not (benchmark_kitti.is_layout(root) or mot_benchmark.find_sequences(root)):
+            parser.error(f"{root}: neither a KITTI folder nor a folder of MOTChallenge "
+                         f"sequences")
     everything = {}
     print("| setting (default) | left out | chosen on the others | HOTA there: chosen / "
           "default / best alone (value) |")
@@ -107,10 +114,17 @@ def main(argv: list[str] | None = None) -> int:
             print(f"| `{name}` ({default:g}) | {row['left_out']} | {row['chosen']:g} | "
                   f"{row['hota_chosen']:.3f} / {row['hota_default']:.3f} / "
                   f"{row['hota_best_alone']:.3f} ({row['best_alone']:g}) |", flush=True)
-    if args.json:
-        args.json.write_text(json.dumps(everything, indent=1))
+    if args.json:  # (whole or not at all: a temporary file renamed into place)
+        part = args.json.with_name(args.json.name + ".part")
+        part.write_text(json.dumps(everything, indent=1))
+        os.replace(part, args.json)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from occtrack.errors import OcctrackError
+
+    try:
+        sys.exit(main())
+    except OcctrackError as err:
+        sys.exit(f"leave_one_set_out.py: error: {err}")

@@ -87,8 +87,8 @@ class TrackerConfig:
     # a detection's edges are Gaussian about the prediction with weight 1 - tail_weight, and
     # tail_scale times as spread with weight tail_weight: the few boxes that jump far (an
     # approaching car, a half-hidden person's visible part) stay the track's rather than
-    # starting a twin (occtrack.models.edge_tail); the weight is learnt while tracking, this
-    # its prior (0: a Gaussian, as before)
+    # starting a twin (occtrack.models.edge_tail; 0: a Gaussian, as before); the weight is
+    # fixed, or with learn_tail_weight learnt by online EM with this as its prior
     tail_weight: float = 0.05
     tail_scale: float = 3.0
     learn_tail_weight: bool = False

@@ -159,7 +159,7 @@ class BoxMeasurement:
     def loglik(self, means: np.ndarray, covs: np.ndarray, z: np.ndarray,
                observed: np.ndarray) -> np.ndarray:
         """log p(z_j | component k) for all pairs, (K, M), censored edges and the tail
-        included."""
+        included (every component's: this dense form is told no labels)."""
         zhat, S, _ = gaussian.innovation(means, covs, self.H, self.R(means))
         out = gaussian.loglik_from_innovation(zhat, S, z, observed)
         if self.tail is not None and out.size:
