@@ -13,6 +13,12 @@ machine hits both alike; the ratios are measured in this one run.
 1. MOT17-04 and MOT17-11, the public FRCNN detections (`--data`, else $OCCTRACK_DATA or
    ../shared/data/mot17): frames per second of occtrack under each occlusion model and of
    ByteTrack, and their ratio (target: at least 1).
+   With `--sets DIR,...` also every sequence of each folder given, a MOTChallenge folder of
+   sequences (MOT17's YOLOX-X boxes) or a KITTI tracking folder (its RRC boxes): occtrack's
+   default against ByteTrack, and the whole folder's frames over the whole time (issue 37:
+   at least ByteTrack's per-frame speed on every set). On KITTI occtrack tracks cars and
+   pedestrians in one run, as `occtrack benchmark` does, and ByteTrack one class at a time:
+   its time is the sum of the two.
 2. Crowds (`occtrack.scenarios.pedestrians`, seed 0): `people` walkers always in view of a
    1920 x 1080 image, boxes 50 to 120 px tall (perspective: feet lower, box taller), 300
    frames at 30 fps, in two kinds:
@@ -34,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -148,9 +155,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=None, help="folder of the MOT17 sequence folders")
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--people", default="50,200,400")
+    parser.add_argument("--people", default="50,200,400",
+                        help="crowd sizes, comma-separated (\"\": no crowds)")
     parser.add_argument("--frames", type=int, default=300, help="crowd frames")
     parser.add_argument("--skip-mot17", action="store_true")
+    parser.add_argument("--sets", default="", help="more data sets: MOTChallenge folders of "
+                        "sequences or KITTI tracking folders, comma-separated")
     args = parser.parse_args()
     peers.load()
 
@@ -171,9 +181,69 @@ def main() -> None:
                 rate = n / best[model][0]
                 print(f"  {name[:8]:<10}{model:<18}{rate:>10.0f}{bt:>11.0f}{rate / bt:>8.2f}")
 
-    people = [int(p) for p in args.people.split(",")]
-    for title, detector in CROWDS.items():
+    for root in (r for r in args.sets.split(",") if r):
+        set_table(Path(root), args.repeats)
+
+    people = [int(p) for p in args.people.split(",") if p]  # (--people "": no crowds)
+    for title, detector in CROWDS.items() if people else ():
         crowd_table(title, detector, people, args.frames, args.repeats)
+
+
+def kitti_race(seq, repeats: int) -> tuple[float, float]:
+    """(occtrack's CPU seconds, ByteTrack's) on a KITTI sequence, fastest of `repeats`:
+    occtrack with every class in one run, ByteTrack a class at a time (cars and pedestrians,
+    as `occtrack benchmark` runs it), its two times summed."""
+    det = seq.det
+    rows = list(det.frame_slices(seq.length))
+    frames = [(det.box[r], det.score[r], det.cls[r]) for r in rows]
+    config = TrackerConfig(image_size=(seq.width, seq.height), fps=seq.fps)
+    per_class = [sv_frames([(det.box[r][det.cls[r] == c], det.score[r][det.cls[r] == c])
+                            for r in rows]) for c in (0, 3)]
+    best_occ = best_bt = float("inf")
+    for _ in range(repeats):
+        tracker = Tracker(config)
+        spent = 0.0
+        for boxes, scores, classes in frames:
+            start = time.process_time()
+            tracker.step(boxes, scores, classes=classes)
+            spent += time.process_time() - start
+        best_occ = min(best_occ, spent)
+        best_bt = min(best_bt, sum(run_bytetrack(d, seq.fps)[0] for d in per_class))
+    return best_occ, best_bt
+
+
+def set_table(root: Path, repeats: int) -> None:
+    """occtrack's default against ByteTrack on every sequence of a data set folder."""
+    from occtrack.experiments import benchmark as mot_benchmark
+    from occtrack.experiments import benchmark_kitti
+
+    print(f"\n{root.resolve().name}: occtrack's default ({DEFAULT} occlusion) against "
+          f"ByteTrack, per-frame call in CPU time (fastest of {repeats} rounds):")
+    print(f"  {'sequence':<18}{'frames':>8}{'occtrack f/s':>14}{'ByteTrack f/s':>15}"
+          f"{'ratio':>8}")
+    total = [0, 0.0, 0.0]
+    if benchmark_kitti.is_layout(root):
+        base = root.resolve()
+        detections = benchmark_kitti.pick_detections(base, None)
+        runs = ((name, benchmark_kitti.load_sequence(base, detections, name))
+                for name in benchmark_kitti.sequence_names(base, detections))
+        timed = ((name, seq.length, *kitti_race(seq, repeats)) for name, seq in runs)
+    else:
+        def mot_runs():
+            for folder in mot_benchmark.find_sequences(root):
+                seq = mot_benchmark.load_sequence(folder)
+                best = race(frames_of(seq.det, seq.length), (seq.width, seq.height), seq.fps,
+                            (DEFAULT,), repeats)
+                yield seq.name, seq.length, best[DEFAULT][0], best["bytetrack"][0]
+        timed = mot_runs()
+    for name, frames, occ, bt in timed:
+        total[0] += frames
+        total[1] += occ
+        total[2] += bt
+        print(f"  {name:<18}{frames:>8}{frames / occ:>14.0f}{frames / bt:>15.0f}"
+              f"{bt / occ:>8.2f}")
+    print(f"  {'all':<18}{total[0]:>8}{total[0] / total[1]:>14.0f}"
+          f"{total[0] / total[2]:>15.0f}{total[2] / total[1]:>8.2f}")
 
 
 def crowd_table(title: str, detector: Detector, people: list[int], num_frames: int,
