@@ -465,3 +465,15 @@ def test_camera_expansion_moves_boxes_away_from_the_centre():
                                    centre[axis] + scale * (mean[:, axis, 0] - centre[axis]))
         np.testing.assert_allclose(f.mean[:n, axis, 1:], mean[:, axis, 1:] * scale[:, None])
     np.testing.assert_allclose(f.cov[:n], cov * scale[:, None, None, None] ** 2)
+
+
+def test_the_median_of_squares_is_numpys_to_the_last_bit():
+    """The learner's median (one in-place partition) against np.median(np.square(x)) for odd
+    and even lengths, one value to the full buffer, and scales from 1e-3 to 1e3."""
+    from occtrack.models.motion import _median_of_squares
+
+    rng = np.random.default_rng(11)
+    for n in [*range(1, 40), 1999, 2000]:
+        for scale in (1e-3, 1.0, 1e3):
+            x = rng.standard_normal(n) * scale
+            assert _median_of_squares(x) == float(np.median(np.square(x)))

@@ -137,6 +137,9 @@ UPDATE_CASES = [
     (dict(boxes=BOXES, classes=[0.5]), "classes must be whole numbers (class ids)"),
     (dict(boxes=BOXES, classes=[np.inf]), "classes must be whole numbers (class ids)"),
     (dict(boxes=BOXES, classes=[2.0**63]), "classes must be whole numbers (class ids)"),
+    (dict(boxes=BOXES, classes=np.array([2**62])), "classes must be whole numbers (class ids)"),
+    (dict(boxes=BOXES, classes=np.array([2**64 - 1], dtype=np.uint64)),
+     "classes must be whole numbers (class ids)"),
     (dict(boxes=BOXES, classes=[{}]), "classes must be an array of numbers of shape (M,), not "
                                       "list ("),
     (dict(boxes=BOXES, timestamp="now"), "timestamp must be a number of seconds, not 'now'"),

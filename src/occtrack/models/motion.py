@@ -121,9 +121,22 @@ class SizeNoiseLearner:
         n = min(self._count[1], self._count[self.lag], self.memory)
         if n < 2:
             return self.prior
-        v1, vl = (float(np.median(np.square(self._diffs[k][:min(self._count[k],
-                                                                  self.memory)])))
+        v1, vl = (_median_of_squares(self._diffs[k][:min(self._count[k], self.memory)])
                   / self.CHI2_MEDIAN for k in (1, self.lag))
         q2 = max(vl - v1, 0.0) / ((self.lag - 1) * dt)
         excess = max(q2 - self.prior**2, 0.0)
         return math.sqrt(self.prior**2 + n / (self.prior_weight + n) * excess)
+
+
+def _median_of_squares(x: np.ndarray) -> float:
+    """np.median(np.square(x)) of finite x, to the last bit, without np.median's checks (a
+    tracker renews the size noise every frame while its buffers fill): the middle value, or
+    the mean of the two middle values, of one partition done in place on the squares."""
+    sq = np.square(x)
+    n = len(sq)
+    k = n // 2
+    if n % 2:
+        sq.partition(k)
+        return float(sq[k])
+    sq.partition((k - 1, k))
+    return float((sq[k - 1] + sq[k]) / 2.0)

@@ -105,6 +105,10 @@ def check_classes(classes: npt.ArrayLike | None, m: int) -> np.ndarray | None:
     if arr.shape != (m,):
         raise ValueError(f"classes must be {m} whole numbers, one per box, not an array of "
                          f"shape {arr.shape}")
+    if arr.dtype.kind in "iu":  # (integers are whole: only their range is checked)
+        if m and not (-2**62 < arr.min() and arr.max() < 2**62):
+            raise ValueError("classes must be whole numbers (class ids)")
+        return arr.astype(np.int64)
     if not (np.isfinite(arr).all() and (arr == np.round(arr)).all()
             and (np.abs(arr) < 2**62).all()):
         raise ValueError("classes must be whole numbers (class ids)")
