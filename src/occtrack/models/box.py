@@ -208,7 +208,8 @@ class BoxMeasurement:
         tail = self.tail
         extra = ()
         if tail is not None:  # the heavy tail, added by the kernel (`models.edge_tail`)
-            d2, m = np.empty(len(k)), np.empty(len(k))
+            # (d^2 and m come back only for a tail that learns from them)
+            d2, m = (np.empty(len(k)), np.empty(len(k))) if tail.learning else (None, None)
             labelled = self._labelled
             if labelled is not None and len(labelled) != len(zhat):
                 labelled = None  # (not this frame's components: the tail for every one)
@@ -226,7 +227,8 @@ class BoxMeasurement:
             out = _loglik_pairs(zhat, S, z, observed, k, j, _log_ndtr(scores), log_peak,
                                 *extra)
         if tail is not None:
-            tail.remember(k, j, d2, m)
+            if tail.learning:
+                tail.remember(k, j, d2, m)
             self._labelled = None
         return out
 
