@@ -13,6 +13,7 @@ from occtrack.metrics import protocol_text as protocols
 from occtrack.metrics.protocol_text import KEYS
 
 NAME = "eval"
+KITTI_PROTOCOLS = ("kitti", "kitti-bev")
 HELP = "score a result file against ground truth (CLEAR MOT, IDF1, HOTA, GOSPA; MOT17 or KITTI)"
 DESCRIPTION = f"""\
 Score a tracker's MOTChallenge result file against a ground-truth file and print MOTA, MOTP,
@@ -50,6 +51,18 @@ kitti: KITTI tracking's official evaluation, run by TrackEval (Kitti2DBox: its
   SCORES[, "calibration": TABLE]}}}}, "notes": [...]}}. The protocol is picked by itself when
   GT_FILE is a KITTI file or folder.
 
+kitti-bev: KITTI 3D tracking scored on the ground plane (TrackEval has no such protocol):
+  TrackEval's HOTA, CLEAR and Identity on the (x, z) centres of the 3D boxes (columns 14 and
+  16, metres in the rectified camera frame) with the similarity max(0, 1 - d / 2 m), so
+  HOTA's thresholds 0.05 .. 0.95 are distances 1.9 .. 0.1 m, and CLEAR, Identity and
+  --calibration count a match within 1 m; MOTP is the mean similarity of CLEAR's matches.
+  Files, folders, classes, sequence lengths, the tables and --json are the kitti protocol's
+  ("protocol": "kitti-bev", and "distance": 2.0), and so are its rules with distance for IoU:
+  result rows matched (Hungarian, within 1 m) to a van (for car), a sitting person (for
+  pedestrian) or a truncated or largely hidden object are removed; its 2D rules (25 px,
+  DontCare regions) are not applied. A true row without a 3D box (-1000) is left out with a
+  note; a result row of a scored class without one is an error.
+
 --json prints one object with the keys
   {", ".join(KEYS[:6])},
   {", ".join(KEYS[6:])}:
@@ -79,7 +92,8 @@ examples:
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --protocol paper --json
   occtrack eval MOT17-04-FRCNN/gt/gt.txt result.txt --out-dir scores/
   occtrack eval kitti/label_02/0000.txt result.txt --protocol kitti --calibration
-  occtrack eval kitti/ results/ --protocol kitti --classes car"""
+  occtrack eval kitti/ results/ --protocol kitti --classes car
+  occtrack eval kitti/ results_3d/ --protocol kitti-bev"""
 
 LABELS = {
     "mota": "MOTA", "motp": "MOTP", "idf1": "IDF1", "hota": "HOTA",
@@ -120,16 +134,18 @@ COMMON_NOTES = {
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("gt", metavar="GT_FILE",
                         help="ground-truth file (MOTChallenge gt.txt, KITTI label_02/NNNN.txt; "
-                             "kitti: or a folder)")
+                             "kitti, kitti-bev: or a folder)")
     parser.add_argument("result", metavar="RESULT_FILE",
-                        help="tracker result file (kitti: or a folder)")
-    parser.add_argument("--protocol", choices=(*protocols.PROTOCOLS, "kitti"), default=None,
+                        help="tracker result file (kitti, kitti-bev: or a folder)")
+    parser.add_argument("--protocol", choices=(*protocols.PROTOCOLS, *KITTI_PROTOCOLS),
+                        default=None,
                         help="scoring protocol (default: kitti for KITTI ground truth, else "
                              "mot17, the official MOTChallenge one; paper: the paper's Table "
-                             "II scoring, see above)")
+                             "II scoring; kitti-bev: KITTI 3D results on the ground plane; "
+                             "see above)")
     parser.add_argument("--classes", metavar="LIST",
-                        help="kitti: comma list of the classes to score (car, pedestrian; "
-                             "default both)")
+                        help="kitti, kitti-bev: comma list of the classes to score (car, "
+                             "pedestrian; default both)")
     parser.add_argument("--frames", type=int, metavar="N",
                         help="sequence length (default: seqLength from the ground truth's "
                              "seqinfo.ini, else the last frame in either file)")
@@ -143,7 +159,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="print one JSON object instead of the table")
     parser.add_argument("--calibration", action="store_true",
                         help="also print the reliability table and ECE of the confidence "
-                             "column (mot17; see above)")
+                             "column (mot17, kitti, kitti-bev; see above)")
     parser.add_argument("--out-dir", metavar="DIR",
                         help="also write TrackEval's pedestrian_summary.txt and "
                              "pedestrian_detailed.csv here (mot17; '-': print the summary)")
@@ -238,8 +254,9 @@ def _pick_protocol(args: argparse.Namespace) -> None:
         kitti = (gt.is_dir() and ((gt / "label_02").is_dir() or any(gt.glob("*.txt")))
                  or gt.is_file() and looks_like_kitti(gt))
         args.protocol = "kitti" if kitti else "mot17"
-    if args.classes is not None and args.protocol != "kitti":
-        raise OcctrackError("--classes picks KITTI's classes; use --protocol kitti")
+    if args.classes is not None and args.protocol not in KITTI_PROTOCOLS:
+        raise OcctrackError("--classes picks KITTI's classes; use --protocol kitti or "
+                            "kitti-bev")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -249,7 +266,7 @@ def run(args: argparse.Namespace) -> int:
 
     start = time.perf_counter()
     _pick_protocol(args)
-    if args.protocol == "kitti":
+    if args.protocol in KITTI_PROTOCOLS:
         return _run_kitti(args, start)
     if args.calibration and args.protocol != "mot17":
         raise OcctrackError("--calibration decides which boxes are right as the mot17 protocol "
@@ -343,18 +360,23 @@ KITTI_COLUMNS = (("hota", "HOTA", ".3f"), ("deta", "DetA", ".3f"), ("assa", "Ass
 
 
 def _run_kitti(args: argparse.Namespace, start: float) -> int:
-    """`occtrack eval --protocol kitti`: TrackEval's Kitti2DBox, per class and combined."""
+    """`occtrack eval --protocol kitti`: TrackEval's Kitti2DBox, per class and combined
+    (`--protocol kitti-bev`: the same on the ground plane, `occtrack.metrics.kitti_bev`)."""
     from occtrack.metrics import trackeval_kitti
 
+    if args.protocol == "kitti-bev":
+        from occtrack.metrics import kitti_bev as scoring
+    else:
+        scoring = trackeval_kitti
     if args.out_dir is not None:
-        raise OcctrackError("--out-dir writes TrackEval's MOTChallenge files; the kitti "
-                            "protocol prints its tables (or --json)")
+        raise OcctrackError(f"--out-dir writes TrackEval's MOTChallenge files; the "
+                            f"{args.protocol} protocol prints its tables (or --json)")
     classes = list(trackeval_kitti.parse_classes(args.classes))
     if args.frames is not None and args.frames < 1:
         raise OcctrackError(f"--frames must be at least 1, got {args.frames}")
     pairs = trackeval_kitti.sequence_pairs(args.gt, args.result)
-    report = trackeval_kitti.evaluate(pairs, classes, args.frames, args.calibration,
-                                      args.max_gap_frames)
+    report = scoring.evaluate(pairs, classes, args.frames, args.calibration,
+                              args.max_gap_frames)
     for note in report["notes"]:
         print(f"occtrack eval: note: {note}", file=sys.stderr)
     if args.json:
@@ -375,10 +397,20 @@ def _run_kitti(args: argparse.Namespace, start: float) -> int:
     return 0
 
 
+KITTI_TITLES = {
+    "kitti": "KITTI tracking's official evaluation, run by TrackEval (Kitti2DBox); HOTA, DetA, "
+             "AssA, LocA: means over the 19 localisation thresholds",
+    "kitti-bev": "KITTI 3D tracking on the ground plane: TrackEval's HOTA, CLEAR and Identity "
+                 "with similarity max(0, 1 - d / 2 m) between (x, z) centres; HOTA, DetA, "
+                 "AssA, LocA: means over the 19 thresholds (1.9 .. 0.1 m); MOTA, IDF1: within "
+                 "1 m; MOTP: mean similarity",
+}
+
+
 def format_kitti(report: dict) -> str:
-    """The kitti protocol's tables: per class a row a sequence and TrackEval's combined row."""
-    lines = ["protocol kitti: KITTI tracking's official evaluation, run by TrackEval "
-             "(Kitti2DBox); HOTA, DetA, AssA, LocA: means over the 19 localisation thresholds"]
+    """The kitti and kitti-bev protocols' tables: per class a row a sequence and TrackEval's
+    combined row."""
+    lines = [f"protocol {report['protocol']}: {KITTI_TITLES[report['protocol']]}"]
     header = f"  {'sequence':<12}" + "".join(f"{title:>8}" for _, title, _ in KITTI_COLUMNS)
 
     def row(name: str, values: dict) -> str:

@@ -59,6 +59,18 @@ detection, that detection's alpha and 3D columns, else -1 / -1000 / -10; the con
 the score), frames numbered as they came. The image size and frame rate come from the flags,
 else from DIR/seqinfo/NNNN.ini when the file sits in a KITTI layout (DIR/det_02/NAME/NNNN.txt).
 
+3D (--3d, KITTI files with the 3D columns, e.g. PointRCNN's): each class's boxes are tracked
+on the ground plane (occtrack.tracker.ground: the footprint's centre, velocity and size in
+metres and seconds; height, elevation and heading carried from the detections), occlusion
+seen from the sensor (nearer boxes hide the angles behind them). The camera's path comes from
+--poses FILE (one 3x4 [R|t] a frame, KITTI's poses/NNNN.txt, found beside a KITTI layout),
+else the camera is taken as still; the calibration's P2 (--calib FILE, KITTI's calib/NNNN.txt,
+found beside a KITTI layout; required) projects a coasting box into the image for the 2D
+columns, clipped to the image (a box that projects nowhere is left out). Scores outside [0, 1]
+are read as logits (PointRCNN's). The result is KITTI's format with the 3D columns in each
+frame's camera coordinates: `occtrack eval --protocol kitti` scores its 2D boxes, `--protocol
+kitti-bev` its ground positions.
+
 The result file is written whole or not at all: to a temporary file beside it, renamed into
 place when complete, so an interrupted run leaves the old file (or none). -o - writes the
 result to standard output (the summary then goes to standard error).
@@ -125,6 +137,14 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-gap-frames", type=whole_number(0), metavar="N",
                         help="most empty frames allowed in a row (default: a day at the "
                              "frame rate)")
+    parser.add_argument("--3d", dest="three_d", action="store_true",
+                        help="KITTI 3D detections: track the 3D boxes on the ground plane")
+    parser.add_argument("--poses", metavar="FILE",
+                        help="with --3d: the camera's poses, one 3x4 [R|t] a frame (default: "
+                             "DIR/poses/NNNN.txt beside a KITTI layout, else a still camera)")
+    parser.add_argument("--calib", metavar="FILE",
+                        help="with --3d: KITTI calibration whose P2 projects coasting boxes "
+                             "(default: DIR/calib/NNNN.txt beside a KITTI layout)")
     parser.add_argument("--force", action="store_true", help="overwrite RESULT_FILE")
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
 
@@ -207,7 +227,17 @@ def run(args: argparse.Namespace) -> int:
     if args.classes is not None and not kitti:
         raise OcctrackError("--classes picks KITTI types; this is a MOTChallenge file (pass "
                             "--format kitti if it is not)", args.detections)
+    if (args.poses or args.calib) and not args.three_d:
+        raise OcctrackError("--poses and --calib go with --3d")
+    if args.three_d:
+        if not kitti:
+            raise OcctrackError("--3d tracks KITTI files with the 3D columns; this is a "
+                                "MOTChallenge file", args.detections)
+        if args.score_range or args.lenient:
+            raise OcctrackError("--score-range and --lenient are for 2D detections, not --3d")
     config, length = build_config(args)
+    if args.three_d:
+        return _track_3d(args, config, length)
     gap = args.max_gap_frames
     if gap is None:
         gap = math.ceil(24 * 3600 * config.fps)
@@ -300,3 +330,53 @@ def _write_kitti(args: argparse.Namespace, config, result, source) -> None:
     corners = clip_to_image(from_ltwh(result.box, "xyxy"), config.image_size)
     write_kitti(args.output, result.frame - 1, result.id, result.classes, corners,
                 result.confidence, box3d, alpha, overwrite=args.force)
+
+
+def _track_3d(args: argparse.Namespace, config, length: int | None) -> int:
+    """--3d: the ground tracker on a KITTI file's 3D boxes, written as a KITTI result."""
+    import numpy as np
+
+    from occtrack.io import kitti
+    from occtrack.io import kitti_geometry as geometry
+    from occtrack.io.mot import check_gaps
+    from occtrack.progress import summary
+    from occtrack.tracker.ground import track_kitti
+
+    table = kitti.read_kitti(args.detections)
+    types = (None if args.classes is None else kitti.parse_classes(args.classes))
+    keep = (table.type != kitti.DONTCARE) & (table.type != kitti.UNKNOWN)
+    if types is not None:
+        keep &= np.isin(table.type, types)
+    skipped = int((~keep).sum())
+    table = table.select(keep)
+    frames = max(length or 0, table.num_frames)
+    if length is not None and len(table) and table.num_frames > length:
+        i = int(np.argmax(table.frame))
+        raise OcctrackError(f"frame {table.frame[i]} is past the sequence's {length} frames "
+                            f"(0..{length - 1}, seqinfo)", args.detections, int(table.line[i]))
+    gap = args.max_gap_frames
+    check_gaps(table, math.ceil(24 * 3600 * config.fps) if gap is None else gap)
+    calib = args.calib or geometry.find_calib(args.detections)
+    if calib is None:
+        raise OcctrackError("--3d needs the camera's calibration (its P2 projects a coasting "
+                            "box into the image): pass --calib FILE (no DIR/calib/NNNN.txt "
+                            "beside a KITTI layout)", args.detections)
+    calibration = geometry.read_calib(calib)
+    poses_file = args.poses or geometry.find_poses(args.detections)
+    poses = None if poses_file is None else geometry.read_poses(poses_file, frames)
+    notes = [f"{skipped} rows skipped (DontCare, unknown or unpicked types)"] if skipped else []
+    if poses is None:
+        notes.append("no poses (--poses FILE): the camera is taken as still")
+    for note in notes:
+        print(f"occtrack track: warning: {args.detections}: {note}", file=sys.stderr)
+    start = time.perf_counter()
+    result = track_kitti(table, frames, config, poses, calibration, config.image_size,
+                         quiet=args.quiet)
+    theta = np.arctan2(result.box3d[:, 3], result.box3d[:, 5])
+    alpha = (result.box3d[:, 6] - theta + np.pi) % (2 * np.pi) - np.pi
+    kitti.write_kitti(args.output, result.frame, result.id, result.type, result.box,
+                      result.score, result.box3d, alpha, overwrite=args.force)
+    if not args.quiet:
+        print(summary(frames, len(np.unique(result.id)), time.perf_counter() - start),
+              file=sys.stderr if args.output == "-" else sys.stdout)
+    return 0

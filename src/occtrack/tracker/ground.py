@@ -1,0 +1,296 @@
+"""3D boxes on the ground plane (a lidar detector's cars and people): `GroundTracker`.
+
+    tracker = GroundTracker(TrackerConfig(fps=10))
+    for boxes3d, scores, classes, pose in frames:        # boxes3d (M, 7): h w l x y z ry
+        tracks = tracker.update(boxes3d, scores, classes, pose=pose)
+        tracks.ids, tracks.boxes3d, tracks.confidence, tracks.detection_index
+
+Boxes are KITTI's: h, w, l in metres, x, y, z the bottom centre in the camera's coordinates
+(x right, y down, z forward), rotation_y the heading about the vertical axis. `pose` (3, 4) is
+the camera's pose [R | t] in a fixed world frame (KITTI's `poses/NNNN.txt`: world point =
+R p + t); without poses the camera is taken as still and its own motion falls to the noise.
+
+The same GM-PMB filter as the image boxes (`Tracker`), in the same state: per ground axis
+(world x, world z) the centre, velocity and half-size of the box's footprint, the axis-aligned
+hull of its four ground corners in the world's axes (a car that turns keeps its hull nearly,
+and the world's axes do not turn with the sensor). Metres and seconds: the noises, given in
+units of a box's size, serve any sensor (`occtrack.models.box`); the filter counts in
+decimetres (`UNIT`). The filter's frame is the
+square of +-`reach` metres around the sensor, re-centred on it every frame: the sensor's
+travel enters the prediction as the camera's shift does in the image (an exact translation
+of every component), so the survival region goes with the sensor wherever it drives.
+Height, elevation and heading are carried from the object's last detection (the filter's
+state holds the footprint): a reported object that took a detection reports that detection's
+box; a coasting one its last detection's shape and heading at the filter's centre.
+
+Occlusion is the sensor's view (`occtrack.occlusion.sensor_view`): nearer boxes hide the
+angles behind them, under the model `config.occlusion` names.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+import numpy.typing as npt
+
+from occtrack.config import TrackerConfig
+from occtrack.occlusion.sensor_view import SensorViewGeometry, sensor_view_occlusion
+from occtrack.tracker.boxes import as_array, check_time
+from occtrack.tracker.tracker import Tracker
+
+REACH = 80.0
+"""m: the filter holds the square of +-REACH around the sensor (a lidar detector's range)."""
+UNIT = 0.1
+"""m: the filter's length unit on the ground. The filter's few absolute lengths are an image's
+pixels (a box under 2 units wide is degenerate and leaves the survival region; an edge within
+`border_margin` units of the border is the border's): in decimetres they hold for a person's
+0.5 m footprint as for a car's."""
+SHAPE_MEMORY = 10.0
+"""s: how long an object's last detected shape is kept after it was last reported."""
+BOX3D_COLUMNS = "h w l x y z rotation_y"
+
+
+@dataclass(frozen=True)
+class GroundTracks:
+    """The objects reported at one frame, n of them, sorted by id.
+
+    Attributes:
+        ids: (n,) int track ids, unique, never reused.
+        boxes3d: (n, 7) h, w, l, x, y, z, rotation_y in this frame's camera coordinates.
+        existence: (n,) probability that each object exists.
+        confidence: (n,) probability that each box is a real object there (`Tracks`).
+        velocities: (n, 2) ground velocity (x, z) in this frame's camera axes, m / s.
+        detection_index: (n,) int, the detection each object took (-1: coasting).
+        classes: (n,) int class of each object, fixed for life.
+        occluded: (n,) bool, coasting with its miss put down to occlusion.
+    """
+
+    ids: np.ndarray
+    boxes3d: np.ndarray
+    existence: np.ndarray
+    confidence: np.ndarray
+    velocities: np.ndarray
+    detection_index: np.ndarray
+    classes: np.ndarray
+    occluded: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    @property
+    def coasting(self) -> np.ndarray:
+        return self.detection_index < 0
+
+
+def check_boxes3d(boxes3d: npt.ArrayLike) -> np.ndarray:
+    """(M, 7) finite boxes with positive h, w, l, or a ValueError saying which is not."""
+    boxes = as_array(boxes3d, "boxes3d", f"(M, 7): {BOX3D_COLUMNS}")
+    if boxes.size == 0:
+        return boxes.reshape(0, 7)
+    if boxes.ndim != 2 or boxes.shape[1] != 7:
+        raise ValueError(f"boxes3d must be (M, 7) ({BOX3D_COLUMNS}), not {boxes.shape}")
+    bad = ~np.isfinite(boxes).all(axis=1)
+    if bad.any():
+        raise ValueError(f"boxes3d row {int(np.argmax(bad))} is not finite")
+    small = ~(boxes[:, :3] > 0).all(axis=1)
+    if small.any():
+        raise ValueError(f"boxes3d row {int(np.argmax(small))}: h, w and l must be positive, "
+                         f"not {boxes[np.argmax(small), :3].tolist()}")
+    return boxes
+
+
+def check_pose(pose: npt.ArrayLike | None) -> np.ndarray:
+    """A finite (3, 4) [R | t]; None: the identity."""
+    if pose is None:
+        return np.eye(3, 4)
+    p = as_array(pose, "pose", "(a 3 x 4 matrix [R | t])")
+    if p.shape != (3, 4) or not np.isfinite(p).all():
+        raise ValueError(f"pose must be a finite 3 x 4 matrix [R | t], not shape {p.shape}")
+    return p
+
+
+def heading_vector(yaw: np.ndarray) -> np.ndarray:
+    """(N, 3) the unit vector along a KITTI heading rotation_y: (cos, 0, -sin)."""
+    return np.stack([np.cos(yaw), np.zeros_like(yaw), -np.sin(yaw)], axis=-1)
+
+
+def heading_of(vectors: np.ndarray) -> np.ndarray:
+    """The rotation_y of (N, 3) vectors (their ground-plane direction)."""
+    return np.arctan2(-vectors[:, 2], vectors[:, 0])
+
+
+def ground_corners(boxes3d: np.ndarray) -> np.ndarray:
+    """(M, 4, 3) the four bottom corners of KITTI 3D boxes, in the boxes' camera frame."""
+    h, w, l, x, y, z, ry = boxes3d.T
+    dl = np.array([0.5, 0.5, -0.5, -0.5])[None] * l[:, None]
+    dw = np.array([0.5, -0.5, -0.5, 0.5])[None] * w[:, None]
+    c, s = np.cos(ry)[:, None], np.sin(ry)[:, None]
+    return np.stack([x[:, None] + c * dl + s * dw, np.broadcast_to(y[:, None], dl.shape),
+                     z[:, None] - s * dl + c * dw], axis=-1)
+
+
+class GroundTracker:
+    """Gaussian-mixture PMB tracker of 3D boxes on the ground plane (see the module).
+
+    Args:
+        config: every setting (`TrackerConfig`); `fps` sets the time step without
+            timestamps, `occlusion` the sensor-view model; `image_size` and `camera_motion`
+            are the ground tracker's own (the square around the sensor, the poses).
+        reach: metres around the sensor that the filter holds.
+    """
+
+    def __init__(self, config: TrackerConfig | None = None, reach: float = REACH):
+        if config is not None and not isinstance(config, TrackerConfig):
+            raise ValueError(f"config must be a TrackerConfig, not {type(config).__name__}")
+        if not (math.isfinite(reach) and reach > 0):
+            raise ValueError(f"reach must be a positive number of metres, not {reach}")
+        c = config or TrackerConfig(fps=10.0)
+        self.reach = float(reach)
+        side = 2 * self.reach / UNIT
+        self.config = replace(c, image_size=(side, side), camera_motion="none")
+        self.geometry = SensorViewGeometry(c.occlusion_gain, *c.occlusion_ramp,
+                                           sensor=np.full(2, side / 2))
+        self.occlusion = sensor_view_occlusion(c.occlusion, self.geometry,
+                                               c.occluder_min_existence)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every object and start again."""
+        self.tracker = Tracker(self.config, self.occlusion)
+        self._origin: np.ndarray | None = None  # world (x, z) of the filter frame's corner
+        self._time = 0.0
+        self._shape: dict[int, np.ndarray] = {}  # id -> h, w, l, world y, world yaw, time
+
+    def update(self, boxes3d: npt.ArrayLike, scores: npt.ArrayLike | None = None,
+               classes: npt.ArrayLike | None = None, pose: npt.ArrayLike | None = None,
+               timestamp: float | None = None) -> GroundTracks:
+        """Track one frame's 3D detections (M, 7) with their scores (M,) in [0, 1] (None:
+        all 1), classes (M,) and the camera's pose (3, 4) in the world (None: the first
+        frame's place); `timestamp` in seconds (None: 1 / fps after the last frame)."""
+        boxes = check_boxes3d(boxes3d)
+        P = check_pose(pose)
+        R, t = P[:, :3], P[:, 3]
+        corners = ground_corners(boxes) @ R.T + t  # (M, 4, 3) in the world
+        origin = t[[0, 2]] - self.reach
+        shift = np.zeros(2) if self._origin is None else self._origin - origin
+        self._origin = origin
+        low = (corners[..., [0, 2]].min(axis=1) - origin) / UNIT
+        high = (corners[..., [0, 2]].max(axis=1) - origin) / UNIT
+        ltwh = np.concatenate([low, high - low], axis=1)
+        affine = np.array([[1.0, 0.0, shift[0] / UNIT], [0.0, 1.0, shift[1] / UNIT]])
+        before = self.tracker._timestamp
+        tracks = self.tracker.update(ltwh, scores, classes, timestamp, "ltwh", affine)
+        if timestamp is not None:
+            self._time = check_time(timestamp, "timestamp")
+        else:
+            self._time += self.tracker.filter.dt if before is not None or self._time else 0.0
+        return self._report(tracks, boxes, R, t, origin)
+
+    def _report(self, tracks, boxes: np.ndarray, R: np.ndarray, t: np.ndarray,
+                origin: np.ndarray) -> GroundTracks:
+        n = len(tracks)
+        out = np.zeros((n, 7))
+        took = tracks.detection_index >= 0
+        out[took] = boxes[tracks.detection_index[took]]
+        if took.any():  # remember each detected object's shape, elevation and heading
+            world_y = (boxes[tracks.detection_index[took], 3:6] @ R.T + t)[:, 1]
+            world_yaw = heading_of(heading_vector(out[took, 6]) @ R.T)
+            for i, k in enumerate(np.flatnonzero(took)):
+                self._shape[int(tracks.ids[k])] = np.array(
+                    [*out[k, :3], world_y[i], world_yaw[i], self._time])
+        coast = np.flatnonzero(~took)
+        if len(coast):
+            centre = (tracks.boxes[coast, :2] + tracks.boxes[coast, 2:] / 2) * UNIT + origin
+            shape = np.array([self._shape.get(int(tracks.ids[k]), self._fallback(
+                tracks.boxes[k], t)) for k in coast]).reshape(-1, 6)
+            world = np.stack([centre[:, 0], shape[:, 3], centre[:, 1]], axis=-1)
+            out[coast, :3] = shape[:, :3]
+            out[coast, 3:6] = (world - t) @ R
+            out[coast, 6] = heading_of(heading_vector(shape[:, 4]) @ R)
+        self._forget(tracks.ids)
+        v = np.zeros((n, 3))
+        v[:, [0, 2]] = tracks.velocities * UNIT
+        velocities = (v @ R)[:, [0, 2]]
+        return GroundTracks(tracks.ids, out, tracks.existence, tracks.confidence, velocities,
+                            tracks.detection_index, tracks.classes, tracks.occluded)
+
+    def _fallback(self, ltwh: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """The shape of an object reported before any detection of its was (its footprint,
+        1.5 m tall, standing on the ground 1.65 m below the camera, KITTI's mounting)."""
+        w, l = sorted(ltwh[2:] * UNIT)
+        return np.array([1.5, w, l, t[1] + 1.65, 0.0, self._time])
+
+    def _forget(self, shown: np.ndarray) -> None:
+        """Drop the shapes of objects not reported for SHAPE_MEMORY seconds."""
+        now = set(int(i) for i in shown)
+        for key in [k for k, s in self._shape.items()
+                    if k not in now and self._time - s[5] > SHAPE_MEMORY]:
+            del self._shape[key]
+
+
+
+
+
+def detection_scores(score: np.ndarray) -> np.ndarray:
+    """A detection file's scores as probabilities: kept where every score is in [0, 1], else
+    read as logits (PointRCNN writes its raw logit) through the logistic function."""
+    score = np.asarray(score, dtype=float)
+    if len(score) == 0 or (score.min() >= 0 and score.max() <= 1):
+        return score
+    return 1.0 / (1.0 + np.exp(-score))
+
+
+def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
+                poses: np.ndarray | None = None, calibration=None,
+                image_size: tuple[float, float] | None = None, quiet: bool = True):
+    """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
+    0..num_frames-1, every class at once, each object keeping its own) and return the result
+    as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
+    detection's own while detected, else the 3D box projected with the calibration's P2 and
+    clipped to the image (a coasting box that projects nowhere in the image is left out of
+    the file, as KITTI's evaluation could not score it). `poses` (F, 3, 4) the camera's path;
+    None: a still camera. The score column is the confidence."""
+    from occtrack.io.kitti import KittiTable
+    from occtrack.io.kitti_geometry import project_boxes
+    from occtrack.progress import progress
+
+    unknown = np.flatnonzero(det.box3d[:, 3] <= -999)
+    if len(unknown):
+        from occtrack.errors import OcctrackError
+        line = None if det.line is None else int(det.line[unknown[0]])
+        raise OcctrackError("a detection without its 3D columns (x y z = -1000): --3d needs "
+                            "a 3D detector's boxes (h w l x y z rotation_y)", det.path, line)
+    tracker = GroundTracker(config)
+    scores = detection_scores(det.score)
+    order = np.argsort(det.frame, kind="stable")
+    bounds = np.searchsorted(det.frame[order], np.arange(num_frames + 1))
+    rows: dict[str, list] = {k: [] for k in ("frame", "id", "type", "box", "box3d", "score")}
+    for f in progress(range(num_frames), num_frames, "tracking 3D", quiet):
+        sel = order[bounds[f]:bounds[f + 1]]
+        tracks = tracker.update(det.box3d[sel], scores[sel], det.type[sel],
+                                pose=None if poses is None else poses[f])
+        box = np.full((len(tracks), 4), np.nan)
+        took = tracks.detection_index >= 0
+        box[took] = det.box[sel[tracks.detection_index[took]]]
+        if calibration is not None and image_size is not None and (~took).any():
+            box[~took] = project_boxes(tracks.boxes3d[~took], calibration.P2, image_size)
+        keep = np.isfinite(box).all(axis=1)
+        rows["frame"].append(np.full(int(keep.sum()), f))
+        rows["id"].append(tracks.ids[keep])
+        rows["type"].append(tracks.classes[keep])
+        rows["box"].append(box[keep])
+        rows["box3d"].append(tracks.boxes3d[keep])
+        rows["score"].append(tracks.confidence[keep])
+    cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in rows.items()}
+    n = len(cat["frame"])
+    return KittiTable(frame=cat["frame"].astype(np.int64), id=cat["id"].astype(np.int64),
+                      type=cat["type"].astype(np.int64), truncated=np.full(n, -1.0),
+                      occluded=np.full(n, -1.0), alpha=np.full(n, -10.0),
+                      box=cat["box"].reshape(n, 4), box3d=cat["box3d"].reshape(n, 7),
+                      score=cat["score"], path=f"<{n} result rows>")
+
+
+__all__ = ["GroundTracker", "GroundTracks", "check_boxes3d", "detection_scores",
+           "ground_corners", "track_kitti"]

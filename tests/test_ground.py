@@ -1,0 +1,312 @@
+"""3D boxes on the ground plane: the sensor's view as occlusion (nearer boxes hide the angles
+behind them), the ground tracker on a moving sensor, and `occtrack track --3d` on KITTI files."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from occtrack.cli import main
+from occtrack.config import TrackerConfig
+from occtrack.io.kitti import read_kitti
+from occtrack.occlusion.base import OcclusionContext
+from occtrack.occlusion.sensor_view import (
+    SensorViewGeometry,
+    SensorViewMeasurementWise,
+    SensorViewObjectWise,
+    sensor_view_occlusion,
+)
+from occtrack.tracker.ground import (
+    GroundTracker,
+    check_boxes3d,
+    detection_scores,
+    ground_corners,
+)
+
+
+def box(x, z, half=1.0):
+    """An edge box (2, 2) of half-size `half` centred at (x, z)."""
+    return np.array([[x - half, x + half], [z - half, z + half]])
+
+
+# -- the sensor's view -------------------------------------------------------------------------
+
+def test_a_nearer_box_on_the_same_bearing_hides_a_farther_one():
+    g = SensorViewGeometry(sensor=np.zeros(2))
+    far, near = box(0, 20), box(0, 10)
+    assert g.visible(far[None], near[None])[0] == pytest.approx(0.0)  # wholly behind it
+    assert g.visible(near[None], far[None])[0] == 1.0  # a farther box hides nothing
+    beside = box(15, 10)
+    assert g.visible(far[None], beside[None])[0] == 1.0  # another bearing
+
+
+def test_the_hidden_share_is_the_angular_share_times_the_gain():
+    g = SensorViewGeometry(gain=2.0, sensor=np.zeros(2))
+    far = np.array([[-2.0, 2.0], [19.0, 21.0]])  # seen over about [-5.7, 5.7] degrees
+    lo, hi, _, _ = g.view(far[None])
+    # an occluder that covers a quarter of its angles, well in front
+    half = 20.0 * math.tan((hi[0] - lo[0]) / 4)
+    near = np.array([[-half, half], [9.0, 11.0]])
+    a, b = g.view(far[None]), g.view(near[None])
+    share = (b[1][0] - b[0][0]) / (a[1][0] - a[0][0])
+    assert g.visible(far[None], near[None])[0] == pytest.approx(1.0 - min(1.0, 2.0 * share))
+
+
+def test_boxes_behind_the_sensor_wrap_around_the_turn():
+    g = SensorViewGeometry(sensor=np.zeros(2))
+    far, near = box(-20, 0.0), box(-10, 0.0)  # straight behind: bearings near +-pi
+    assert g.visible(far[None], near[None])[0] == pytest.approx(0.0)
+
+
+def test_gated_pairs_give_the_dense_table_numbers():
+    rng = np.random.default_rng(4)
+    centres = rng.uniform(-60, 60, (120, 2))
+    boxes = np.stack([box(x, z, rng.uniform(0.5, 3)) for x, z in centres])
+    occluders = boxes[:50]
+    g = SensorViewGeometry(sensor=np.zeros(2))
+    weights = rng.uniform(0, 1, 50)
+    skip = rng.integers(-1, 50, 120)
+    sparse = g.visible(boxes, occluders, weights, skip)
+    dense = g.visible(boxes, occluders, weights, skip, dense=True)
+    assert 120 * 50 > 4096  # the gate is taken
+    np.testing.assert_allclose(sparse, dense, rtol=0, atol=1e-12)
+    assert (sparse < 1).sum() > 5  # some are hidden
+
+
+class _Edges:
+    def predicted_edges(self, means):
+        return np.stack([means[:, :, 0] - means[:, :, 2], means[:, :, 0] + means[:, :, 2]],
+                        axis=-1)
+
+
+def _means(*centres):
+    return np.array([[[x, 0, 1.0], [z, 0, 1.0]] for x, z in centres])
+
+
+def test_object_wise_an_object_never_hides_itself_and_the_poisson_part_hides_nothing():
+    model = SensorViewObjectWise(SensorViewGeometry(sensor=np.zeros(2)))
+    means = _means((0, 10), (0, 20), (0, 30))
+    owner = np.array([0, 1, -1])  # the farthest is the Poisson part's
+    ctx = OcclusionContext(means, None, np.ones(3), owner, np.array([0.9, 0.9]),
+                           np.zeros((0, 2, 2)), _Edges())
+    terms = model.terms(ctx)
+    assert terms.visible[0] == 1.0  # nothing in front of it
+    assert terms.visible[1] == pytest.approx(0.1)  # behind object 0, existence .9
+    assert terms.visible[2] == pytest.approx(0.01)  # behind both
+    lone = OcclusionContext(means[:1], None, np.ones(1), np.array([0]), np.array([0.9]),
+                            np.zeros((0, 2, 2)), _Edges())
+    assert model.terms(lone).visible[0] == 1.0
+
+
+def test_measurement_wise_the_seen_boxes_hide_the_components_and_each_other():
+    model = SensorViewMeasurementWise(SensorViewGeometry(sensor=np.zeros(2)))
+    means = _means((0, 20), (20, 20))
+    z = np.stack([box(0, 10), box(0, 30)])
+    ctx = OcclusionContext(means, None, np.ones(2), np.array([0, 1]), np.ones(2), z, _Edges())
+    terms = model.terms(ctx)
+    np.testing.assert_allclose(terms.hidden, [1.0, 0.0])
+    np.testing.assert_allclose(terms.seen_hidden, [0.0, 1.0])  # the far one, behind the near
+    np.testing.assert_array_equal(terms.visible, [1.0, 1.0])
+
+
+def test_unknown_model_names_the_choices():
+    with pytest.raises(ValueError, match="choose from none, object-wise, measurement-wise"):
+        sensor_view_occlusion("both", SensorViewGeometry())
+
+
+# -- the ground tracker ------------------------------------------------------------------------
+
+def pose_at(x, z, yaw=0.0):
+    """The camera at world (x, 0, z), turned by `yaw` about the vertical."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, 0, s, x], [0, 1, 0, 0], [-s, 0, c, z]])
+
+
+def in_camera(world_xz, pose, shape=(1.5, 1.8, 4.2), world_yaw=0.0):
+    """A KITTI box (7,) of a car at world (x, z) seen from `pose`."""
+    R, t = pose[:, :3], pose[:, 3]
+    p = R.T @ (np.array([world_xz[0], 1.6, world_xz[1]]) - t)
+    v = R.T @ np.array([math.cos(world_yaw), 0, -math.sin(world_yaw)])
+    return np.array([*shape, *p, math.atan2(-v[2], v[0])])
+
+
+def test_ground_corners_follow_kitti_conventions():
+    corners = ground_corners(np.array([[1.5, 2.0, 4.0, 1.0, 1.6, 10.0, 0.0]]))[0]
+    np.testing.assert_allclose(np.sort(corners[:, 0]), [-1, -1, 3, 3])  # length along x
+    np.testing.assert_allclose(np.sort(corners[:, 2]), [9, 9, 11, 11])
+    np.testing.assert_allclose(corners[:, 1], 1.6)
+
+
+@pytest.mark.parametrize("occlusion", ["none", "object-wise", "measurement-wise"])
+def test_a_car_keeps_its_id_while_the_sensor_drives_100_m_and_turns(occlusion):
+    """The frame re-centres on the sensor every frame: a parked car and one driving beside the
+    sensor each keep one id over 100 m of the sensor's travel, with their boxes in place."""
+    tracker = GroundTracker(TrackerConfig(fps=10.0, occlusion=occlusion))
+    ids = {0: set(), 1: set()}
+    for f in range(125):
+        sensor = (0.0, 0.8 * f)  # 8 m/s: 100 m in 125 frames
+        pose = pose_at(*sensor, yaw=0.2 * math.sin(f / 20))
+        parked = (4.0, 60.0)
+        beside = (-4.0, 0.8 * f + 15.0)
+        truth = [parked, beside]
+        boxes = np.array([in_camera(p, pose) for p in truth])
+        visible = [abs(sensor[1] - parked[1]) < 70, True]
+        tracks = tracker.update(boxes[visible], np.full(sum(visible), 0.9), pose=pose)
+        for k, seen in enumerate(visible):
+            if not seen:
+                continue
+            j = sum(visible[:k])
+            mine = tracks.detection_index == j
+            if f >= 5:
+                assert mine.sum() == 1, (f, k)
+                ids[k].add(int(tracks.ids[mine][0]))
+                np.testing.assert_allclose(tracks.boxes3d[mine][0], boxes[j], atol=1e-9)
+    assert len(ids[0]) == 1 and len(ids[1]) == 1
+
+
+def _behind_a_parked_car(occlusion):
+    """A car crossing at 30 m (6 m/s) behind a parked one at 12 m, the sensor driving towards
+    them at 1 m/s: the crossing car is missed while the parked one hides it from the sensor
+    (as the sensor's view has it at the true boxes). Per frame: hidden?, the crossing car's
+    true box, the tracks."""
+    tracker = GroundTracker(TrackerConfig(fps=10.0, occlusion=occlusion))
+    g = SensorViewGeometry(sensor=np.zeros(2))
+    out = []
+    for f in range(60):
+        pose = pose_at(0.0, 0.1 * f)
+        parked, crossing = (0.0, 12.0), (-18.0 + 0.6 * f, 30.0)
+        boxes = np.array([in_camera(parked, pose, world_yaw=math.pi / 2),
+                          in_camera(crossing, pose)])
+        corners = ground_corners(boxes)[:, :, [0, 2]]
+        edges = np.stack([corners.min(axis=1), corners.max(axis=1)], axis=-1)
+        hidden = g.visible(edges[1:], edges[:1])[0] < 0.5
+        seen = boxes[:1] if hidden else boxes
+        out.append((hidden, boxes[1], tracker.update(seen, np.full(len(seen), 0.95),
+                                                     pose=pose)))
+    return out
+
+
+def test_object_wise_keeps_a_hidden_car_at_least_as_long_as_none():
+    """Measured: of the 16 hidden frames, none keeps the crossing car through 3, object-wise
+    through 4 (issue 40: the sensor's view does not yet hold a hidden car through)."""
+    runs = {name: _behind_a_parked_car(name) for name in ("none", "object-wise")}
+    hidden = np.array([h for h, _, _ in runs["none"]])
+    assert 5 <= hidden.sum() <= 30 and not hidden[:10].any() and not hidden[-10:].any()
+    kept = {}
+    for name, frames in runs.items():
+        ids, through = set(), 0
+        for is_hidden, truth, tracks in frames:
+            near = np.hypot(*(tracks.boxes3d[:, [3, 5]] - truth[[3, 5]]).T) < 1.5
+            ids.update(tracks.ids[near].tolist())
+            if is_hidden and near.any():
+                through += 1
+                assert tracks.coasting[near].all()
+                if name == "object-wise":
+                    assert tracks.occluded[near].all()
+        kept[name] = (through, len(ids))
+    assert kept["object-wise"][0] >= kept["none"][0] >= 1
+
+
+def test_bad_boxes_are_refused_by_row():
+    with pytest.raises(ValueError, match="row 1: h, w and l must be positive"):
+        check_boxes3d([[1, 1, 1, 0, 0, 5, 0], [1, -2, 1, 0, 0, 5, 0]])
+    with pytest.raises(ValueError, match="row 0 is not finite"):
+        check_boxes3d([[1, 1, np.nan, 0, 0, 5, 0]])
+    with pytest.raises(ValueError, match=r"\(M, 7\)"):
+        check_boxes3d(np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="pose must be a finite 3 x 4"):
+        GroundTracker().update(np.zeros((0, 7)), pose=np.eye(3))
+
+
+def test_logits_become_probabilities_and_probabilities_stay():
+    np.testing.assert_array_equal(detection_scores(np.array([0.2, 1.0])), [0.2, 1.0])
+    np.testing.assert_allclose(detection_scores(np.array([-2.0, 0.0, 3.0])),
+                               1 / (1 + np.exp([2.0, 0.0, -3.0])))
+
+
+# -- occtrack track --3d -----------------------------------------------------------------------
+
+def _layout(tmp_path, rows, frames, calib=True, poses=None):
+    for sub in ("det_02/pr", "label_02", "seqinfo", "calib", "poses"):
+        (tmp_path / sub).mkdir(parents=True, exist_ok=True)
+    det = tmp_path / "det_02" / "pr" / "0000.txt"
+    det.write_text("".join(r + "\n" for r in rows))
+    (tmp_path / "seqinfo" / "0000.ini").write_text(
+        f"[Sequence]\nname=0000\nframeRate=10\nseqLength={frames}\nimWidth=1242\n"
+        f"imHeight=375\n")
+    if calib:
+        p2 = "721.5 0 609.6 44.9 0 721.5 172.9 0.2 0 0 1 0.003"
+        (tmp_path / "calib" / "0000.txt").write_text(
+            f"P0: {p2}\nP1: {p2}\nP2: {p2}\nP3: {p2}\nR0_rect: 1 0 0 0 1 0 0 0 1\n"
+            f"Tr_velo_to_cam: 0 -1 0 0 0 0 -1 0 1 0 0 0\n"
+            f"Tr_imu_to_velo: 1 0 0 0 0 1 0 0 0 0 1 0\n")
+    lines = poses if poses is not None else frames
+    (tmp_path / "poses" / "0000.txt").write_text(
+        "1 0 0 0 0 1 0 0 0 0 1 0\n" * lines)
+    return det
+
+
+def _rows(frames, skip=()):
+    out = []
+    for f in range(frames):
+        if f in skip:
+            continue
+        z = 20.0 - 0.5 * f
+        out.append(f"{f} -1 Car -1 -1 0 500 150 600 220 1.5 1.7 4.0 1.0 1.6 {z} 0.1 4.0")
+    return out
+
+
+def test_track_3d_writes_kitti_3d_rows_and_projects_the_coasting_ones(tmp_path, capsys):
+    det = _layout(tmp_path, _rows(12, skip=(9,)), 12)
+    out = tmp_path / "out.txt"
+    assert main(["track", str(det), "-o", str(out), "--3d", "--quiet"]) == 0
+    result = read_kitti(out)
+    assert len(np.unique(result.id)) == 1
+    assert set(range(3, 12)) <= set(result.frame.tolist())
+    coasting = result.frame == 9
+    assert coasting.sum() == 1
+    # the coasting box lies where the car drove, and its 2D box is its projection
+    np.testing.assert_allclose(result.box3d[coasting][0, 5], 20.0 - 4.5, atol=0.3)
+    assert not np.allclose(result.box[coasting][0], [500, 150, 600, 220])
+    detected = ~coasting & (result.frame >= 3)
+    np.testing.assert_allclose(result.box[detected], [[500, 150, 600, 220]] * detected.sum())
+    again = tmp_path / "again.txt"
+    main(["track", str(det), "-o", str(again), "--3d", "--quiet"])
+    assert again.read_bytes() == out.read_bytes()  # same input, same bytes
+
+
+def _one_error(capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    return err
+
+
+def test_track_3d_without_a_calibration_names_the_file(tmp_path, capsys):
+    det = _layout(tmp_path, _rows(5), 5, calib=False)
+    assert main(["track", str(det), "-o", str(tmp_path / "o.txt"), "--3d"]) != 0
+    err = _one_error(capsys)
+    assert "0000.txt" in err and "--calib FILE" in err
+
+
+def test_track_3d_with_a_short_pose_file_names_it(tmp_path, capsys):
+    det = _layout(tmp_path, _rows(5), 5, poses=3)
+    assert main(["track", str(det), "-o", str(tmp_path / "o.txt"), "--3d"]) != 0
+    err = _one_error(capsys)
+    assert "poses" in err and "3 poses" in err
+
+
+def test_track_3d_refuses_rows_without_3d_columns_by_line(tmp_path, capsys):
+    rows = _rows(3) + ["3 -1 Car -1 -1 -10 500 150 600 220 -1 -1 -1 -1000 -1000 -1000 -10 0.9"]
+    det = _layout(tmp_path, rows, 5)
+    assert main(["track", str(det), "-o", str(tmp_path / "o.txt"), "--3d"]) != 0
+    err = _one_error(capsys)
+    assert f"{det}:4" in err and "3D columns" in err
+
+
+def test_poses_without_3d_are_refused(tmp_path, capsys):
+    det = _layout(tmp_path, _rows(3), 3)
+    assert main(["track", str(det), "-o", str(tmp_path / "o.txt"), "--poses",
+                 str(tmp_path / "poses" / "0000.txt")]) != 0
+    assert "--poses and --calib go with --3d" in _one_error(capsys)
