@@ -22,6 +22,7 @@ from occtrack.tracker.ground import (
     GroundTracker,
     check_boxes3d,
     detection_scores,
+    ground_config,
     ground_corners,
 )
 
@@ -171,7 +172,7 @@ def _behind_a_parked_car(occlusion):
     them at 1 m/s: the crossing car is missed while the parked one hides it from the sensor
     (as the sensor's view has it at the true boxes). Per frame: hidden?, the crossing car's
     true box, the tracks."""
-    tracker = GroundTracker(TrackerConfig(fps=10.0, occlusion=occlusion))
+    tracker = GroundTracker(ground_config({"occlusion": occlusion}))
     g = SensorViewGeometry(sensor=np.zeros(2))
     out = []
     for f in range(60):
@@ -188,10 +189,13 @@ def _behind_a_parked_car(occlusion):
     return out
 
 
-def test_object_wise_keeps_a_hidden_car_at_least_as_long_as_none():
-    """Measured: of the 16 hidden frames, none keeps the crossing car through 3, object-wise
-    through 4 (issue 40: the sensor's view does not yet hold a hidden car through)."""
-    runs = {name: _behind_a_parked_car(name) for name in ("none", "object-wise")}
+@pytest.mark.parametrize("occlusion", ["object-wise", "measurement-wise"])
+def test_the_sensors_view_keeps_a_hidden_car_longer_than_none(occlusion):
+    """Of the 16 hidden frames, none keeps the crossing car through 3 and the sensor's view
+    (either model) through 8, reported as occluded, in place, at its velocity; then its
+    coasting confidence (the chance its box is within IoU .5, which falls as the prediction
+    spreads) goes under .5 and the car comes back under a second id."""
+    runs = {name: _behind_a_parked_car(name) for name in ("none", occlusion)}
     hidden = np.array([h for h, _, _ in runs["none"]])
     assert 5 <= hidden.sum() <= 30 and not hidden[:10].any() and not hidden[-10:].any()
     kept = {}
@@ -203,10 +207,9 @@ def test_object_wise_keeps_a_hidden_car_at_least_as_long_as_none():
             if is_hidden and near.any():
                 through += 1
                 assert tracks.coasting[near].all()
-                if name == "object-wise":
-                    assert tracks.occluded[near].all()
+                assert tracks.occluded[near].all() == (name != "none")
         kept[name] = (through, len(ids))
-    assert kept["object-wise"][0] >= kept["none"][0] >= 1
+    assert kept[occlusion][0] >= 8 > kept["none"][0] >= 1
 
 
 def test_bad_boxes_are_refused_by_row():
@@ -310,3 +313,46 @@ def test_poses_without_3d_are_refused(tmp_path, capsys):
     assert main(["track", str(det), "-o", str(tmp_path / "o.txt"), "--poses",
                  str(tmp_path / "poses" / "0000.txt")]) != 0
     assert "--poses and --calib go with --3d" in _one_error(capsys)
+
+
+# -- what an object's scores say ---------------------------------------------------------------
+
+def test_the_score_log_likelihood_ratio_is_the_smoothed_shares():
+    from occtrack.models.score_model import ScoreLearner
+
+    learner = ScoreLearner()
+    learner.objects[:] = np.arange(10.0)
+    learner.clutter[:] = 9.0 - np.arange(10.0)
+    shares_o = (np.arange(10.0) + 1) / (45 + 10)
+    shares_c = (10.0 - np.arange(10.0)) / (45 + 10)
+    np.testing.assert_allclose(learner.log_likelihood_ratio(np.array([0.05, 0.55, 1.0])),
+                               np.log(shares_o / shares_c)[[0, 5, 9]], rtol=1e-12)
+
+
+def test_a_track_of_clutter_like_scores_loses_its_confidence_and_a_real_one_keeps_it():
+    """With score densities where a .15 score is 9 times likelier from clutter and a .95 one
+    9 times likelier from an object, two parked cars detected every frame: the confidence of
+    the low-scoring one is the filter's times 1 / (1 + 9^n) after n detections, and it goes
+    from the report; the high-scoring one is reported throughout."""
+    tracker = GroundTracker(ground_config({"occlusion": "none"}))
+    learner = tracker.tracker._scores
+    learner.objects[:], learner.clutter[:] = 1e9, 1e9
+    learner.objects[1], learner.clutter[1] = 1e9, 9e9
+    learner.objects[9], learner.clutter[9] = 9e9, 1e9
+    plain = GroundTracker(ground_config({"occlusion": "none"}), score_evidence=False)
+    boxes = np.array([in_camera((-5.0, 20.0), np.eye(3, 4)), in_camera((5.0, 20.0), np.eye(3, 4))])
+    scores = np.array([0.15, 0.95])
+    for _ in range(8):
+        weighed = tracker.update(boxes, scores)
+        alone = plain.update(boxes, scores)
+    assert len(alone) == 2
+    assert weighed.detection_index.tolist() == [1]
+    ratio = weighed.confidence[0] / alone.confidence[alone.detection_index == 1][0]
+    # (the learner moved a little from the filter's own marginals: 1e9 pseudo-detections)
+    assert ratio == pytest.approx(1.0, abs=1e-6)
+
+
+def test_ground_defaults_keep_a_hidden_objects_velocity():
+    assert ground_config().coast_velocity_time == math.inf
+    assert ground_config({"coast_velocity_time": 0.5}).coast_velocity_time == 0.5
+    assert GroundTracker().config.fps == 10.0

@@ -187,6 +187,10 @@ def build_config(args: argparse.Namespace):
         values["occlusion"] = args.occlusion
     if args.frame_step is not None:
         values["frame_step"] = args.frame_step
+    if getattr(args, "three_d", False):
+        from occtrack.tracker.ground import ground_config
+
+        return ground_config(values, source), length
     return TrackerConfig.from_dict(values, source), length
 
 

@@ -92,3 +92,12 @@ class ScoreLearner:
         """g(s_j) of each detection: the clutter density's score factor (the learnt ratio of
         the detection's bin to the top bin's)."""
         return self._table[self.bin_of(scores)]
+
+    def log_likelihood_ratio(self, scores: np.ndarray) -> np.ndarray:
+        """log f_O(s_j) / f_C(s_j) of each detection: how much likelier its score is from an
+        object than from clutter, the two score densities per bin being the learnt
+        (discounted) shares of the detections the filter called objects and clutter, each
+        with one pseudo-detection a bin (so a bin no detection filled says nothing)."""
+        objects = (self.objects + 1.0) / (self.objects.sum() + self.bins)
+        clutter = (self.clutter + 1.0) / (self.clutter.sum() + self.bins)
+        return np.log(objects / clutter)[self.bin_of(scores)]
