@@ -33,6 +33,7 @@ from occtrack.errors import OcctrackError
 
 COMMANDS = (
     "benchmark",
+    "bev",
     "calibrate",
     "demo",
     "eval",

@@ -79,6 +79,22 @@ frame rate is seqinfo's. The JSON is
 and occtrack report draws it (tables and calibration; --per-frame and --keep-boxes are
 MOTChallenge's only).
 
+KITTI with 3D detections (every row has its 3D columns, x y z not -1000, e.g. det_02/pointrcnn;
+decided by the files' content): occtrack's models track the 3D boxes on the ground plane (as
+occtrack track --3d) with each sequence's camera poses DIR/poses/NNNN.txt (without one the
+camera is taken as still, with a note) and calibration DIR/calib/NNNN.txt (required: its P2
+projects a coasting box into the image for the 2D columns), all classes in one run; the peers
+track the same detections' 2D boxes class by class, the scores read as probabilities (logits,
+PointRCNN's, through the logistic function, as the ground tracker reads them). Every run is
+scored by Kitti2DBox as above, and occtrack's also on the ground plane (as occtrack eval
+--protocol kitti-bev: HOTA, CLEAR and Identity on the boxes' (x, z) centres, similarity
+max(0, 1 - d / 2 m)); the tables add a ground-plane table after each one, a peer's row "-".
+The JSON adds "detections_3d" (true), "notes", "ground": {"protocol": "kitti-bev", "distance",
+"method"}, per sequence "poses" (whether a pose file was used), and beside each class's
+"trackers" (per sequence, combined and mean) a "ground" object: {"truth" (per sequence),
+"trackers": {TRACKER: SCORES or null for a peer}, "calibration": {TRACKER: TABLE}} (SCORES
+without the run times, the same run's as the 2D scores).
+
 --config FILE takes a TOML file of TrackerConfig settings for occtrack's models (the JSON then
 holds them under "settings"): e.g. learn_size_noise = false to see what the learnt size noise
 buys.
@@ -86,6 +102,7 @@ buys.
 examples:
   occtrack benchmark $OCCTRACK_DATA
   occtrack benchmark ../shared/data/kitti --json kitti.json --quiet
+  occtrack benchmark ../shared/data/kitti --detections pointrcnn --json kitti3d.json
   occtrack benchmark MOT17-04-FRCNN --trackers measurement-wise,bytetrack,botsort
   occtrack benchmark $OCCTRACK_DATA --json benchmark.json --quiet
   occtrack benchmark $OCCTRACK_DATA --json run.json --keep-boxes  # for occtrack report run.json
@@ -111,7 +128,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "label_02/ and det_02/, else MOTChallenge sequence folders)")
     parser.add_argument("--detections", metavar="NAME",
                         help="kitti: the detector folder det_02/NAME (default: the only one, "
-                             "else rrc)")
+                             "else rrc); 3D boxes there (e.g. pointrcnn) are tracked on the "
+                             "ground plane by occtrack's models")
     parser.add_argument("--classes", metavar="LIST",
                         help="kitti: comma list of classes to score (car, pedestrian; default "
                              "both)")
@@ -147,7 +165,8 @@ def run(args: argparse.Namespace) -> int:
 
             root = Path(args.root)
             inputs += [*root.glob("evaluate_tracking.seqmap*"), *root.glob("label_02/*"),
-                       *root.glob("det_02/*/*"), *root.glob("seqinfo/*")]
+                       *root.glob("det_02/*/*"), *root.glob("seqinfo/*"),
+                       *root.glob("calib/*"), *root.glob("poses/*")]
         else:
             for folder in benchmark.find_sequences(args.root):
                 inputs += [folder / "seqinfo.ini", folder / "det" / "det.txt",
@@ -183,6 +202,9 @@ def run(args: argparse.Namespace) -> int:
     if settings:
         report["settings"] = settings
     seconds = time.perf_counter() - start
+    if not args.quiet:
+        for note in report.get("notes", ()):
+            print(f"occtrack benchmark: note: {note}", file=sys.stderr)
 
     text = benchmark.to_json(report)
     if args.json == "-":

@@ -17,13 +17,25 @@ reports a benchmark) and the plain mean over the sequences that have a true box 
 result's confidence column (a box is right when matched at IoU >= 0.5 to a true box of its
 class), pooled over the sequences. Runs go on `occtrack sweep`'s engine, as
 `occtrack.experiments.benchmark`'s do.
+
+3D detections (every row with its 3D columns, x y z not -1000, e.g. PointRCNN's; decided by
+the files' content, not the folder's name): occtrack's models track the 3D boxes on the ground
+plane (`occtrack.tracker.ground.track_kitti`, every class in one run as above) with each
+sequence's camera poses (`DIR/poses/NNNN.txt`; without one the camera is taken as still, with
+a note) and calibration (`DIR/calib/NNNN.txt`, required: its P2 projects a coasting box into
+the image), and are scored twice: in the image as above (their 2D boxes: the detection's own
+while detected, else the 3D box projected) and on the ground plane (`kitti_bev`: TrackEval's
+HOTA, CLEAR and Identity on the (x, z) centres, similarity max(0, 1 - d / 2 m)). The peers
+track the same detections' 2D boxes class by class, the scores turned into probabilities as
+the ground tracker reads them (`detection_scores`: PointRCNN's logits through the logistic
+function); they have no 3D output, so their ground-plane entries are null.
 """
 
 from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +50,7 @@ from occtrack.experiments.benchmark import (
     _row,
     run_jobs,
 )
+from occtrack.io import kitti_geometry
 from occtrack.io.kitti import (
     UNKNOWN_3D,
     KittiTable,
@@ -46,6 +59,7 @@ from occtrack.io.kitti import (
     read_kitti,
 )
 from occtrack.io.mot import MotTable, read_seqinfo
+from occtrack.metrics import kitti_bev
 from occtrack.metrics.reliability import pooled, reliability
 from occtrack.metrics.trackeval_kitti import (
     CLASS_TYPE,
@@ -65,6 +79,12 @@ COMBINED_METHOD = ("TrackEval COMBINED_SEQ (Kitti2DBox): counts summed over sequ
                    "AssA, LocA and HOTA from the summed counts and HOTA_TP-weighted averages")
 MEAN_METHOD = ("plain mean over the sequences with at least one scored true box of the class "
                "of each sequence's number")
+GROUND_METHOD = (f"kitti-bev: TrackEval's HOTA, CLEAR and Identity on the ground plane, (x, z) "
+                 f"centres of the 3D boxes, similarity max(0, 1 - d / {kitti_bev.DISTANCE:g} m) "
+                 f"(CLEAR and Identity match within {kitti_bev.DISTANCE * kitti_bev.MATCH:g} "
+                 f"m), Kitti2DBox's distractor and truncation rules; peers have no 3D output "
+                 f"(null)")
+GROUND_COLUMNS = tuple(c for c in COLUMNS if c[0] != "frames_per_second")
 
 
 def is_layout(root: str | os.PathLike) -> bool:
@@ -109,7 +129,8 @@ def sequence_names(root: Path, detections: str) -> list[str]:
 
 @dataclass(frozen=True)
 class Sequence:
-    """One KITTI sequence, read: its ground truth and detections (every known class)."""
+    """One KITTI sequence, read: its ground truth and detections (every known class); for
+    3D detections also the camera's calibration and poses (`three_d`)."""
 
     name: str
     width: int
@@ -118,34 +139,98 @@ class Sequence:
     length: int
     gt: KittiTable
     det: MotTable  # frames 1-based, cls the KITTI type index
+    table: KittiTable | None = None  # the detection rows behind `det`, one a row, 3D columns
+    calibration: kitti_geometry.Calibration | None = None  # set for 3D detections only
+    poses: np.ndarray | None = None  # (F, 3, 4); None: no poses file (a still camera)
+
+    @property
+    def three_d(self) -> bool:
+        """Whether occtrack's models track this sequence's 3D boxes on the ground plane."""
+        return self.calibration is not None
 
 
-def load_sequence(root: Path, detections: str, name: str) -> Sequence:
+def load_sequence(root: Path, detections: str, name: str, three_d: bool = False) -> Sequence:
+    """A sequence of the folder; with `three_d`, its calibration (required) and poses (if
+    any) too and the detection scores as probabilities (`with_geometry`)."""
     info = read_seqinfo(root / "seqinfo" / f"{name}.ini")
     gt = read_kitti(root / "label_02" / f"{name}.txt")
-    det, _, _ = detections_to_mot(read_kitti(root / "det_02" / detections / f"{name}.txt"))
+    raw = read_kitti(root / "det_02" / detections / f"{name}.txt")
+    det, rows, _ = detections_to_mot(raw)
     n = int(info["length"])
     for frames, path in ((gt.num_frames, gt.path), (det.num_frames, det.path)):
         if frames > n:
             raise OcctrackError(f"rows reach frame {frames - 1} but seqinfo says seqLength={n} "
                                 f"(frames 0..{n - 1})", path)
-    return Sequence(name, int(info["width"]), int(info["height"]), int(info["fps"]), n, gt,
-                    det)
+    seq = Sequence(name, int(info["width"]), int(info["height"]), int(info["fps"]), n, gt,
+                   det, raw.select(rows))
+    return with_geometry(root, seq) if three_d else seq
+
+
+def geometry_files(root: Path, name: str) -> tuple[Path, Path]:
+    """A sequence's calibration and pose files: DIR/calib/NNNN.txt, DIR/poses/NNNN.txt."""
+    return root / "calib" / f"{name}.txt", root / "poses" / f"{name}.txt"
+
+
+def with_geometry(root: Path, seq: Sequence) -> Sequence:
+    """The sequence ready for the ground tracker: its calibration (an OcctrackError naming the
+    file when there is none), its poses (None without a pose file: a still camera) and the
+    detection scores as probabilities (`detection_scores`: logits through the logistic
+    function), the same for occtrack's models and the peers."""
+    from occtrack.tracker.ground import detection_scores
+
+    calib, poses = geometry_files(root, seq.name)
+    if not calib.is_file():
+        raise OcctrackError(f"sequence {seq.name} has no calib/{calib.name}: its 3D detections "
+                            f"need the camera's calibration (KITTI's calib/NNNN.txt; its P2 "
+                            f"projects a coasting box into the image)", str(calib))
+    table = seq.table
+    assert table is not None
+    score = detection_scores(table.score)
+    return replace(seq, det=replace(seq.det, score=score.copy()),
+                   table=replace(table, score=score),
+                   calibration=kitti_geometry.read_calib(calib),
+                   poses=(kitti_geometry.read_poses(poses, seq.length) if poses.is_file()
+                          else None))
+
+
+def has_3d(sequences: list[Sequence]) -> tuple[bool, str | None]:
+    """Whether the detections are 3D: every row (of a known class) in every sequence has its
+    3D columns (x y z not -1000), and there is a row. A folder where some rows have them and
+    some not is tracked as 2D, with the note returned saying so."""
+    total = missing = 0
+    first = None
+    for seq in sequences:
+        table = seq.table
+        assert table is not None
+        unknown = np.flatnonzero((table.box3d[:, 3:6] == -1000).any(axis=1))
+        total += len(table)
+        missing += len(unknown)
+        if len(unknown) and first is None:
+            line = "" if table.line is None else f" line {int(table.line[unknown[0]])}"
+            first = f"{table.path}{line}"
+    if total and not missing:
+        return True, None
+    if missing and missing < total:
+        return False, (f"{missing} of {total} detection rows have no 3D columns (x y z = "
+                       f"-1000; first at {first}): the detections are tracked as 2D boxes")
+    return False, None
 
 
 _SEQUENCES: dict = {}
 
 
-def cached_sequence(root: str, detections: str, name: str) -> Sequence:
+def cached_sequence(root: str, detections: str, name: str, three_d: bool = False) -> Sequence:
     """The sequence, read once per process and again when one of its files changed."""
     base = Path(root)
-    files = (base / "seqinfo" / f"{name}.ini", base / "label_02" / f"{name}.txt",
-             base / "det_02" / detections / f"{name}.txt")
-    key = (root, detections, name)
-    stamp = tuple(path.stat().st_mtime_ns for path in files)
+    files = [base / "seqinfo" / f"{name}.ini", base / "label_02" / f"{name}.txt",
+             base / "det_02" / detections / f"{name}.txt"]
+    if three_d:
+        files += [path for path in geometry_files(base, name) if path.is_file()]
+    key = (root, detections, name, three_d)
+    stamp = tuple((str(path), path.stat().st_mtime_ns) for path in files)
     cached = _SEQUENCES.get(key)
     if cached is None or cached[0] != stamp:
-        _SEQUENCES[key] = (stamp, load_sequence(base, detections, name))
+        _SEQUENCES[key] = (stamp, load_sequence(base, detections, name, three_d))
     return _SEQUENCES[key][1]
 
 
@@ -166,9 +251,20 @@ def result_table(frame, ids, types, ltwh, score, image_size=None) -> KittiTable:
 def track(name: str, seq: Sequence, classes: tuple[str, ...],
           settings: dict | None = None) -> KittiTable:
     """One tracker on a sequence's boxes of `classes`: occtrack (by occlusion model, with
-    `settings` over the defaults) on all of them at once, a peer class by class."""
+    `settings` over the defaults) on all of them at once, a peer class by class. For a 3D
+    sequence (`Sequence.three_d`) occtrack tracks the 3D boxes on the ground plane and its
+    result has the 3D columns; a peer tracks the 2D boxes."""
     types = [CLASS_TYPE[c] for c in classes]
     det = seq.det.select(np.isin(seq.det.cls, types))
+    if name in MODELS and seq.three_d:
+        from occtrack.tracker.ground import ground_config, track_kitti
+
+        assert seq.table is not None
+        config = ground_config({**(settings or {}), "occlusion": name, "fps": seq.fps,
+                                "image_size": (seq.width, seq.height)})
+        return track_kitti(seq.table.select(np.isin(seq.table.type, types)), seq.length,
+                           config, seq.poses, seq.calibration, (seq.width, seq.height),
+                           quiet=True)
     if name in MODELS:
         config = TrackerConfig.from_dict({**(settings or {}), "occlusion": name,
                                           "fps": seq.fps,
@@ -197,27 +293,43 @@ class Job:
     tracker: str
     classes: tuple[str, ...] = CLASSES
     settings: tuple = ()  # (name, value) pairs of TrackerConfig settings for occtrack's models
+    three_d: bool = False  # 3D detections: occtrack on the ground plane, also scored there
 
 
 def run_job(job: Job) -> dict:
     """Track and score one sequence with one tracker: per class TrackEval's results, the
-    headline scores and the reliability table."""
-    seq = cached_sequence(job.root, job.detections, job.sequence)
+    headline scores and the reliability table; for occtrack on 3D detections also the same
+    on the ground plane under "ground" (`kitti_bev`), for a peer there None."""
+    seq = cached_sequence(job.root, job.detections, job.sequence, job.three_d)
     peers.load_for(job.tracker)
     start = time.perf_counter()
     result = track(job.tracker, seq, job.classes, dict(job.settings))
     spent = time.perf_counter() - start
     out = {"seconds": spent, "classes": {}}
+    tracks = {cls: int(len(np.unique(result.id[result.type == CLASS_TYPE[cls]])))
+              for cls in job.classes}
     for cls, scored in scored_frames(seq.gt, result, seq.length, job.classes).items():
         results = sequence_results(scored.trackeval)
         calibration = reliability(scored, result.score)
         out["classes"][cls] = {
             "results": results, "calibration": calibration,
             "truth": int(scored.trackeval["num_gt_dets"]),
-            "scores": {**summary(results), "ece": calibration.ece,
-                       "tracks": int(len(np.unique(result.id[result.type == CLASS_TYPE[cls]]))),
+            "scores": {**summary(results), "ece": calibration.ece, "tracks": tracks[cls],
                        "seconds": spent,
                        "frames_per_second": seq.length / max(spent, 1e-9)}}
+    if job.three_d:
+        ground = (kitti_bev.scored_frames(seq.gt, result, seq.length, job.classes)
+                  if job.tracker in MODELS else {})
+        for cls in job.classes:
+            out["classes"][cls]["ground"] = None
+            if cls in ground:
+                results = sequence_results(ground[cls].trackeval)
+                calibration = reliability(ground[cls], result.score)
+                out["classes"][cls]["ground"] = {
+                    "results": results, "calibration": calibration,
+                    "truth": int(ground[cls].trackeval["num_gt_dets"]),
+                    "scores": {**summary(results), "ece": calibration.ece,
+                               "tracks": tracks[cls]}}
     return out
 
 
@@ -226,7 +338,9 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
               settings: dict | None = None) -> dict:
     """Track and score every sequence of a KITTI folder with every tracker; the report that
     `occtrack benchmark --json` writes for a KITTI folder. `settings`: TrackerConfig values
-    over the defaults for occtrack's models."""
+    over the defaults for occtrack's models. With 3D detections (`has_3d`) occtrack's models
+    track on the ground plane and the report adds, per class, the ground-plane scores
+    ("ground", see the module); "notes" says what the caller should print."""
     base = Path(root).resolve()
     if not is_layout(base):
         raise OcctrackError("not a KITTI tracking folder: it needs label_02/ and det_02/",
@@ -234,27 +348,47 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
     detections = pick_detections(base, detections)
     names = sequence_names(base, detections)
     sequences = [load_sequence(base, detections, name) for name in names]  # checked up front
+    three_d, note = has_3d(sequences)
+    notes = [note] if note else []
+    if three_d:  # the calibrations (required) and poses read and checked before any run
+        sequences = [with_geometry(base, seq) for seq in sequences]
+        still = [seq.name for seq in sequences if seq.poses is None]
+        if still:
+            notes.append(f"no poses/NNNN.txt for {', '.join(still)}: the camera is taken as "
+                         f"still there (its own motion falls to the tracker's noise)")
     for name in trackers:
         peers.load_for(name)
     pairs = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)  # (hashable)
                          for k, v in (settings or {}).items()))
 
     def job_of(sequence: str, tracker: str) -> Job:
-        return Job(str(base), detections, sequence, tracker, tuple(classes), pairs)
+        return Job(str(base), detections, sequence, tracker, tuple(classes), pairs, three_d)
 
     jobs = [job_of(seq.name, name) for seq in sequences for name in trackers]
     done = run_jobs(jobs, engine, quiet, run_job,
                     lambda job: f"{job.tracker} on {job.sequence}")
     report: dict = {"protocol": PROTOCOL, "layout": "kitti", "folder": str(base),
-                    "detections": detections, "trackers": list(trackers),
-                    "classes": list(classes), "sequences": {},
+                    "detections": detections, "detections_3d": three_d,
+                    "trackers": list(trackers), "classes": list(classes), "sequences": {},
                     "combined": {"method": COMBINED_METHOD, "classes": {}},
-                    "mean": {"method": MEAN_METHOD, "classes": {}}}
+                    "mean": {"method": MEAN_METHOD, "classes": {}}, "notes": notes}
+    models = [name for name in trackers if name in MODELS]
+    ground = three_d and bool(models)  # the ground-plane scores: occtrack's 3D runs only
+    if ground:
+        report["ground"] = {"protocol": "kitti-bev", "distance": kitti_bev.DISTANCE,
+                            "method": GROUND_METHOD}
     for seq in sequences:
-        report["sequences"][seq.name] = {
+        entry = report["sequences"][seq.name] = {
             "frames": seq.length, "fps": seq.fps, "image_size": [seq.width, seq.height],
             "classes": {cls: {"truth": done[job_of(seq.name, trackers[0])]["classes"][cls]["truth"],
                               "trackers": {}, "calibration": {}} for cls in classes}}
+        if three_d:
+            entry["poses"] = seq.poses is not None
+        if ground:
+            for cls in classes:
+                entry["classes"][cls]["ground"] = {
+                    "truth": done[job_of(seq.name, models[0])]["classes"][cls]["ground"]["truth"],
+                    "trackers": {}, "calibration": {}}
     frames = sum(seq.length for seq in sequences)
     for cls in classes:
         combined = report["combined"]["classes"].setdefault(cls, {"trackers": {},
@@ -281,7 +415,37 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
             mean["trackers"][name] = {
                 key: (float(np.mean([values[key] for values in per_seq])) if per_seq
                       else None) for key in FRACTIONS}
+            if ground:
+                _ground_scores(report, sequences, cls, name, outs)
     return report
+
+
+def _ground_scores(report: dict, sequences: list[Sequence], cls: str, name: str,
+                   outs: list[dict]) -> None:
+    """One tracker's ground-plane entries of a class: per sequence, combined (TrackEval's
+    COMBINED_SEQ) and the mean over the sequences with a true object there; None (null) for a
+    peer, which has no 3D output."""
+    combined = report["combined"]["classes"][cls].setdefault(
+        "ground", {"trackers": {}, "calibration": {}})
+    mean = report["mean"]["classes"][cls].setdefault("ground", {"trackers": {}})
+    parts = [out["classes"][cls]["ground"] for out in outs]
+    for seq, part in zip(sequences, parts, strict=True):
+        entry = report["sequences"][seq.name]["classes"][cls]["ground"]
+        entry["trackers"][name] = None if part is None else part["scores"]
+        if part is not None:
+            entry["calibration"][name] = part["calibration"].as_dict()
+    if any(part is None for part in parts):
+        combined["trackers"][name] = mean["trackers"][name] = None
+        return
+    calibration = pooled([part["calibration"] for part in parts])
+    combined["calibration"][name] = calibration.as_dict()
+    combined["trackers"][name] = {
+        **summary(combined_results([part["results"] for part in parts])),
+        "ece": calibration.ece, "tracks": sum(part["scores"]["tracks"] for part in parts)}
+    per_seq = [part["scores"] for part in parts if part["truth"]]
+    mean["trackers"][name] = {
+        key: (float(np.mean([values[key] for values in per_seq])) if per_seq else None)
+        for key in FRACTIONS}
 
 
 def format_report(report: dict) -> str:
@@ -291,7 +455,17 @@ def format_report(report: dict) -> str:
     lines = [f"Protocol kitti (TrackEval Kitti2DBox), detections {report['detections']}; "
              "HOTA, DetA, AssA and LocA are means over the 19 localisation thresholds; "
              "frames/s is the tracker call alone (occtrack: all classes in one run)."]
+    if report.get("detections_3d"):
+        lines.append("3D detections: occtrack's models track the 3D boxes on the ground plane "
+                     "(each sequence's poses and calibration) and are scored on their 2D boxes "
+                     "(the detection's while detected, else the 3D box projected); the peers "
+                     "track the 2D boxes, the scores as probabilities.")
+    if "ground" in report:
+        lines.append(f"Ground plane: {report['ground']['method']}; LocA and MOTP are the mean "
+                     f"similarity of the matches.")
     count = len(report["sequences"])
+    mean_columns = [c for c in COLUMNS if c[0] in FRACTIONS]
+    ground_mean = [c for c in GROUND_COLUMNS if c[0] in FRACTIONS]
     for cls in report["classes"]:
         lines += ["", f"== {cls} =="]
         for name, entry in report["sequences"].items():
@@ -302,17 +476,39 @@ def format_report(report: dict) -> str:
             lines += ["", f"{name} {cls} ({w}x{h}, {entry['fps']} fps, {entry['frames']} "
                           f"frames, {part['truth']} true boxes)", _header()]
             lines += [_row(tracker, values) for tracker, values in part["trackers"].items()]
+            if "ground" in part:
+                lines += _ground_table(f"{name} {cls} on the ground plane "
+                                       f"({part['ground']['truth']} true objects):",
+                                       part["ground"]["trackers"], GROUND_COLUMNS)
         lines += ["", f"{cls}, combined over {count} sequences "
                       f"({report['combined']['method']}):", _header()]
-        lines += [_row(tracker, values) for tracker, values in
-                  report["combined"]["classes"][cls]["trackers"].items()]
-        mean_columns = [c for c in COLUMNS if c[0] in FRACTIONS]
+        combined = report["combined"]["classes"][cls]
+        lines += [_row(tracker, values) for tracker, values in combined["trackers"].items()]
+        if "ground" in combined:
+            lines += _ground_table(f"{cls}, combined over {count} sequences, on the ground "
+                                   f"plane:", combined["ground"]["trackers"], GROUND_COLUMNS)
         values = report["mean"]["classes"][cls]["trackers"]
         if all(v["hota"] is not None for v in values.values()):
             lines += ["", f"{cls}, mean over sequences ({report['mean']['method']}):",
                       _header(mean_columns)]
             lines += [_row(tracker, v, mean_columns) for tracker, v in values.items()]
+        ground = report["mean"]["classes"][cls].get("ground")
+        if ground and all(v is None or v["hota"] is not None
+                          for v in ground["trackers"].values()):
+            lines += _ground_table(f"{cls}, mean over sequences, on the ground plane:",
+                                   ground["trackers"], ground_mean)
     return "\n".join(lines)
 
 
-__all__ = ["Job", "benchmark", "format_report", "is_layout", "run_job"]
+def _ground_table(title: str, rows: dict, columns) -> list[str]:
+    """A ground-plane table: a row a tracker, "-" in every column for a peer (no 3D
+    output)."""
+    lines = ["", title, _header(columns)]
+    for tracker, values in rows.items():
+        lines.append(_row(tracker, values, columns) if values is not None else
+                     f"  {tracker:<18}" + "".join(f"{'-':>9}" for _ in columns))
+    return lines
+
+
+__all__ = ["Job", "benchmark", "format_report", "has_3d", "is_layout", "run_job",
+           "with_geometry"]

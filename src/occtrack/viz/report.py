@@ -759,6 +759,17 @@ def build_page(report: dict, source: str = "", title: str | None = None,
             f"<script>{SCRIPT}</script>\n</body>\n</html>\n")
 
 
+def _ground_table(part: dict, colors: dict[str, str], columns, table_id: str) -> list[str]:
+    """A 3D KITTI run's scores on the ground plane (`--protocol kitti-bev`), where the part has
+    them; a peer (2D boxes only) shows dashes."""
+    ground = part.get("ground")
+    if not ground:
+        return []
+    trackers = {name: values or {} for name, values in ground.get("trackers", {}).items()}
+    return ["<h3>On the ground plane (centres within 2 m)</h3>",
+            _table(trackers, colors, columns, table_id=table_id)]
+
+
 def _view_body(report: dict, cls: str, colors: dict[str, str], show: str | None,
                start: int) -> tuple[list[str], int]:
     """The page's part for one view (all of a MOTChallenge report, one class of a KITTI
@@ -781,11 +792,13 @@ def _view_body(report: dict, cls: str, colors: dict[str, str], show: str | None,
         f"{'s' if pooled_over != 1 else ''}</h2>",
         f'<p class="meta">{_esc(combined.get("method", ""))}.</p>',
         _table(combined["trackers"], colors, table_id=f"{prefix}combined-table"),
+        *_ground_table(combined, colors, COLUMNS[:-1], f"{prefix}combined-ground"),
         _reliability_diagram(combined.get("calibration"), colors, _DIAGRAM_TITLE
                              + f" (the boxes of all {pooled_over} pooled)"),
         f"<h2>{_esc(label)}Mean over {count} sequence{'s' if count != 1 else ''}</h2>",
         f'<p class="meta">{_esc(mean.get("method", ""))}.</p>',
         _table(mean["trackers"], colors, mean_columns, table_id=f"{prefix}mean-table"),
+        *_ground_table(mean, colors, mean_columns, f"{prefix}mean-ground"),
         "</section>",
     ]
     for i, (name, entry) in enumerate(sequences):
