@@ -335,10 +335,11 @@ def test_a_track_of_clutter_like_scores_loses_its_confidence_and_a_real_one_keep
     the low-scoring one is the filter's times 1 / (1 + 9^n) after n detections, and it goes
     from the report; the high-scoring one is reported throughout."""
     tracker = GroundTracker(ground_config({"occlusion": "none"}))
-    learner = tracker.tracker._scores
+    learner = tracker._evidence_scores  # unit log-odds bins from logit(.05): .15 in 1, .95 in 5
+    assert learner.bin_of(np.array([0.15, 0.95])).tolist() == [1, 5]
     learner.objects[:], learner.clutter[:] = 1e9, 1e9
     learner.objects[1], learner.clutter[1] = 1e9, 9e9
-    learner.objects[9], learner.clutter[9] = 9e9, 1e9
+    learner.objects[5], learner.clutter[5] = 9e9, 1e9
     plain = GroundTracker(ground_config({"occlusion": "none"}), score_evidence=False)
     boxes = np.array([in_camera((-5.0, 20.0), np.eye(3, 4)), in_camera((5.0, 20.0), np.eye(3, 4))])
     scores = np.array([0.15, 0.95])
@@ -350,6 +351,18 @@ def test_a_track_of_clutter_like_scores_loses_its_confidence_and_a_real_one_keep
     ratio = weighed.confidence[0] / alone.confidence[alone.detection_index == 1][0]
     # (the learner moved a little from the filter's own marginals: 1e9 pseudo-detections)
     assert ratio == pytest.approx(1.0, abs=1e-6)
+
+
+def test_log_odds_bins_are_a_unit_of_log_odds_wide_from_the_floor():
+    from occtrack.models.score_model import ScoreLearner
+
+    learner = ScoreLearner(score_floor=0.05, log_odds=True)
+    start = math.log(0.05 / 0.95)
+    logits = np.array([start - 3, start + 0.01, start + 0.99, start + 1.01, start + 9.5, 40.0])
+    scores = 1 / (1 + np.exp(-logits))
+    assert learner.bin_of(scores).tolist() == [0, 0, 0, 1, 9, 9]
+    plain = ScoreLearner(score_floor=0.05)
+    assert plain.bin_of(scores[3:5]).tolist() == [1, 9]  # the probability bins: .1 wide
 
 
 def test_ground_defaults_keep_a_hidden_objects_velocity():

@@ -43,14 +43,23 @@ class ScoreLearner:
     """Online EM for the score term g(s) of the clutter density (see the module)."""
 
     def __init__(self, score_floor: float = 0.05, power: float = 2.0, bins: int = BINS,
-                 memory: float = 60.0, prior_weight: float = 50.0, refresh: int = 10):
+                 memory: float = 60.0, prior_weight: float = 50.0, refresh: int = 10,
+                 log_odds: bool = False):
         if bins < 2:
             raise ValueError(f"bins must be at least 2, not {bins}")
         if not prior_weight > 0:
             raise ValueError(f"prior_weight must be positive, not {prior_weight}")
         self.bins, self.memory, self.prior_weight = bins, float(memory), float(prior_weight)
         self.score_floor, self.power = float(score_floor), float(power)
-        centres = (np.arange(bins) + 0.5) / bins
+        # log_odds: bins one unit of log-odds wide from the floor's up (a detector whose
+        # probabilities crowd near 1, as a lidar detector's logistic scores do, is told apart
+        # there; the probability bins put every score above .9 in one)
+        self.log_odds = bool(log_odds)
+        self._start = math.log(max(self.score_floor, 1e-6) / (1.0 - max(self.score_floor, 1e-6)))
+        if self.log_odds:
+            centres = 1.0 / (1.0 + np.exp(-(self._start + np.arange(bins) + 0.5)))
+        else:
+            centres = (np.arange(bins) + 0.5) / bins
         self._prior = np.maximum(centres, score_floor) ** -power  # g0 at each bin's centre
         self.clutter = np.zeros(bins)  # discounted sum of pi_j per bin
         self.objects = np.zeros(bins)  # discounted sum of 1 - pi_j per bin
@@ -59,6 +68,10 @@ class ScoreLearner:
 
     def bin_of(self, scores: np.ndarray) -> np.ndarray:
         """The bin of each score, scores below 0 in the first and 1 or above in the last."""
+        if self.log_odds:
+            s = np.clip(np.asarray(scores, dtype=float), 1e-12, 1.0 - 1e-12)
+            b = np.floor(np.log(s / (1.0 - s)) - self._start).astype(np.int64)
+            return np.clip(b, 0, self.bins - 1)
         b = (np.clip(np.asarray(scores, dtype=float), 0.0, 1.0) * self.bins).astype(np.int64)
         np.minimum(b, self.bins - 1, out=b)
         return b

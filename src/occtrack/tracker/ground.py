@@ -33,8 +33,12 @@ What an object's scores say (`score_evidence`): a lidar detector reports the sam
 as a car frame after frame, and once such a track is confirmed the filter takes its detections
 as an object's, however low their scores. Each object's detections' scores are therefore
 weighed as evidence of whether it is a real object at all: the sum over the detections it took
-of log f_O(s) / f_C(s), the score densities of objects and of clutter that the filter learns
-online from its own association marginals (`ScoreLearner.log_likelihood_ratio`), is the
+of log f_O(s) / f_C(s), the score densities of objects and of clutter learnt online from the
+filter's own association marginals (`ScoreLearner.log_likelihood_ratio`, its bins a unit of
+log-odds wide: a lidar detector's logistic scores crowd above .9, where the filter's
+probability bins see one bin; one learner for every class: one a class was measured worse on
+KITTI's walkers, whose few true detections cannot outweigh the false tracks' in their own), is
+the
 log-odds of a Bernoulli "real or a persistent false object" with even prior odds (scores
 independent given the class), and the reported confidence is the filter's times that
 probability (docs/kitti-3d.md has the scores with it).
@@ -49,6 +53,7 @@ import numpy as np
 import numpy.typing as npt
 
 from occtrack.config import TrackerConfig
+from occtrack.models.score_model import ScoreLearner
 from occtrack.occlusion.sensor_view import SensorViewGeometry, sensor_view_occlusion
 from occtrack.tracker.boxes import as_array, check_time
 from occtrack.tracker.tracker import Tracker
@@ -189,6 +194,9 @@ class GroundTracker:
         self._time = 0.0  # s since the first frame
         self._steps = 0
         self._shape: dict[int, np.ndarray] = {}  # id -> h, w, l, world y, world yaw, time
+        c = self.config  # the score densities the evidence reads (see the module)
+        self._evidence_scores = ScoreLearner(c.score_floor, c.clutter_score_power,
+                                             log_odds=True)
         self._evidence: dict[int, list] = {}  # id -> [log-odds that it is real, time last seen]
 
     def update(self, boxes3d: npt.ArrayLike, scores: npt.ArrayLike | None = None,
@@ -215,21 +223,23 @@ class GroundTracker:
             self._time += self.tracker.filter.dt if self._steps else 0.0
         self._steps += 1
         if self.score_evidence:
-            tracks = self._weigh_scores(tracks, scores)
+            given = np.ones(len(boxes)) if scores is None else \
+                np.asarray(scores, dtype=float).reshape(-1)
+            tracks = self._weigh_scores(tracks, given)
         return self._report(tracks, boxes, R, t, origin)
 
-    def _weigh_scores(self, tracks, scores):
+    def _weigh_scores(self, tracks, scores: np.ndarray):
         """The reported tracks with each confidence times the probability that the object is
         real given the scores of every detection it took (see the module); those left under
         `report_min_confidence` are not reported."""
         n = len(tracks)
-        took = tracks.detection_index >= 0
         llr = np.zeros(n)
+        took = tracks.detection_index >= 0
+        self._evidence_scores.update(scores, self.tracker.filter.clutter_probability,
+                                     self.tracker.filter.dt)
         if took.any():
-            given = np.ones(len(tracks.detection_index)) if scores is None else \
-                np.asarray(scores, dtype=float).reshape(-1)
-            llr[took] = self.tracker._scores.log_likelihood_ratio(
-                given[tracks.detection_index[took]])
+            llr[took] = self._evidence_scores.log_likelihood_ratio(
+                scores[tracks.detection_index[took]])
         odds = np.empty(n)
         for i in range(n):
             entry = self._evidence.setdefault(int(tracks.ids[i]), [0.0, 0.0])
@@ -303,9 +313,11 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
     0..num_frames-1, every class at once, each object keeping its own) and return the result
     as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
-    detection's own while detected, else the 3D box projected with the calibration's P2 and
-    clipped to the image (a coasting box that projects nowhere in the image is left out of
-    the file, as KITTI's evaluation could not score it). `poses` (F, 3, 4) the camera's path;
+    detection's own while detected, else the 3D box projected with the calibration's P2. A
+    coasting box that the image's border cuts, or that projects nowhere in the image, is left
+    out of the file: the camera sees no part of it beyond the border, so its clipped
+    projection is not the box a camera would show (KITTI labels such an object truncated and
+    does not score it). `poses` (F, 3, 4) the camera's path;
     None: a still camera. The score column is the confidence."""
     from occtrack.io.kitti import KittiTable
     from occtrack.io.kitti_geometry import project_boxes
@@ -330,7 +342,12 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
         took = tracks.detection_index >= 0
         box[took] = det.box[sel[tracks.detection_index[took]]]
         if calibration is not None and image_size is not None and (~took).any():
-            box[~took] = project_boxes(tracks.boxes3d[~took], calibration.P2, image_size)
+            projected = project_boxes(tracks.boxes3d[~took], calibration.P2, image_size)
+            width, height = image_size
+            cut = ((projected[:, 0] <= 0) | (projected[:, 1] <= 0) | (projected[:, 2] >= width)
+                   | (projected[:, 3] >= height))
+            projected[cut] = np.nan
+            box[~took] = projected
         keep = np.isfinite(box).all(axis=1)
         rows["frame"].append(np.full(int(keep.sum()), f))
         rows["id"].append(tracks.ids[keep])
