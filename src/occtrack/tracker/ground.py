@@ -1,6 +1,6 @@
 """3D boxes on the ground plane (a lidar detector's cars and people): `GroundTracker`.
 
-    tracker = GroundTracker(TrackerConfig(fps=10))
+    tracker = GroundTracker()                           # ground_config(): 10 Hz
     for boxes3d, scores, classes, pose in frames:        # boxes3d (M, 7): h w l x y z ry
         tracks = tracker.update(boxes3d, scores, classes, pose=pose)
         tracks.ids, tracks.boxes3d, tracks.confidence, tracks.detection_index
@@ -10,18 +10,19 @@ Boxes are KITTI's: h, w, l in metres, x, y, z the bottom centre in the camera's 
 the camera's pose [R | t] in a fixed world frame (KITTI's `poses/NNNN.txt`: world point =
 R p + t); without poses the camera is taken as still and its own motion falls to the noise.
 
-The same GM-PMB filter as the image boxes (`Tracker`), in the same state: per ground axis
-(world x, world z) the centre, velocity and half-size of the box's footprint, the axis-aligned
-hull of its four ground corners in the world's axes (a car that turns keeps its hull nearly,
-and the world's axes do not turn with the sensor). Metres and seconds: the noises, given in
-units of a box's size, serve any sensor (`occtrack.models.box`); the filter counts in
-decimetres (`UNIT`). The filter's frame is the
-square of +-`reach` metres around the sensor, re-centred on it every frame: the sensor's
-travel enters the prediction as the camera's shift does in the image (an exact translation
-of every component), so the survival region goes with the sensor wherever it drives.
-Height, elevation and heading are carried from the object's last detection (the filter's
-state holds the footprint): a reported object that took a detection reports that detection's
-box; a coasting one its last detection's shape and heading at the filter's centre.
+The state. The same GM-PMB filter as the image boxes (`Tracker`), in the same state: per
+ground axis (world x, world z) the centre, velocity and half-size of the box's footprint, the
+axis-aligned hull of its four ground corners in the world's axes (a car that turns keeps its
+hull nearly, and the world's axes do not turn with the sensor). Metres and seconds, counted
+in decimetres inside the filter (`UNIT`); the noises, in units of a box's size, serve any
+sensor (`occtrack.models.box`). Height, elevation and heading are carried from the object's
+last detection: an object that took a detection reports that detection's box, a coasting one
+its last detection's shape and heading at the filter's centre.
+
+The sensor's motion. The filter's frame is the square of +-`reach` metres around the sensor,
+re-centred on it every frame: the sensor's travel enters the prediction as the camera's shift
+does in the image (an exact translation of every component), so the survival region goes with
+the sensor wherever it drives.
 
 Occlusion is the sensor's view (`occtrack.occlusion.sensor_view`): nearer boxes hide the
 angles behind them, under the model `config.occlusion` names. A vehicle or a walker hidden
@@ -29,19 +30,18 @@ from the sensor goes on moving: the ground's defaults (`GROUND_DEFAULTS`) keep a
 object's velocity (`coast_velocity_time` infinite), where the image boxes' let it fade in
 0.1 s.
 
-What an object's scores say (`score_evidence`): a lidar detector reports the same wall or hedge
-as a car frame after frame, and once such a track is confirmed the filter takes its detections
-as an object's, however low their scores. Each object's detections' scores are therefore
-weighed as evidence of whether it is a real object at all: the sum over the detections it took
-of log f_O(s) / f_C(s), the score densities of objects and of clutter learnt online from the
-filter's own association marginals (`ScoreLearner.log_likelihood_ratio`, its bins a unit of
-log-odds wide: a lidar detector's logistic scores crowd above .9, where the filter's
-probability bins see one bin; one learner for every class: one a class was measured worse on
-KITTI's walkers, whose few true detections cannot outweigh the false tracks' in their own), is
-the
-log-odds of a Bernoulli "real or a persistent false object" with even prior odds (scores
-independent given the class), and the reported confidence is the filter's times that
-probability (docs/kitti-3d.md has the scores with it).
+What an object's scores say (`score_evidence`). A lidar detector reports the same wall or
+hedge as a car frame after frame, and once such a track is confirmed the filter takes its
+detections as an object's, however low their scores. Each object's scores are therefore
+weighed as evidence that it is real at all: the sum over the detections it took of
+log f_O(s) / f_C(s) is the log-odds of a Bernoulli "real, or a persistent false object" with
+even prior odds (scores independent given the class), and the reported confidence is the
+filter's times that probability. f_O and f_C are the score densities of objects and clutter
+learnt online from the filter's own association marginals
+(`ScoreLearner.log_likelihood_ratio`), in bins a unit of log-odds wide (a lidar detector's
+logistic scores crowd above .9, all in one of the filter's probability bins), one learner for
+every class (one a class was measured worse on KITTI's walkers, whose few true detections
+cannot outweigh the false tracks' in their own). docs/kitti-3d.md has the scores.
 """
 
 from __future__ import annotations
