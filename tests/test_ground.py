@@ -369,3 +369,20 @@ def test_ground_defaults_keep_a_hidden_objects_velocity():
     assert ground_config().coast_velocity_time == math.inf
     assert ground_config({"coast_velocity_time": 0.5}).coast_velocity_time == 0.5
     assert GroundTracker().config.fps == 10.0
+
+
+def test_what_the_ground_tracker_remembers_is_bounded_by_the_scene():
+    """A car passes every 3 s for 5 minutes (100 objects): the shapes and the scores'
+    evidence kept per id stay those of the last SHAPE_MEMORY seconds' objects, not of all."""
+    from occtrack.tracker.ground import SHAPE_MEMORY
+
+    tracker = GroundTracker(ground_config({"occlusion": "none"}))
+    seen, most = set(), 0
+    for f in range(3000):
+        t = (f % 30) / 10.0  # a new car each 3 s, driving past at 10 m/s
+        car = (-15.0 + 10.0 * t, 20.0)
+        tracks = tracker.update(in_camera(car, np.eye(3, 4))[None], [0.95])
+        seen.update(tracks.ids.tolist())
+        most = max(most, len(tracker._shape), len(tracker._evidence))
+    assert len(seen) >= 75
+    assert most <= SHAPE_MEMORY / 3.0 + 2
