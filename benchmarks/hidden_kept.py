@@ -43,6 +43,7 @@ from occtrack.experiments.benchmark import MODELS
 from occtrack.io.kitti import KittiTable
 from occtrack.metrics.trackeval_kitti import CLASS_TYPE
 from occtrack.spatial import iou
+from occtrack.tracker.boxes import to_ltwh
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASSES = ("car", "pedestrian")
@@ -68,8 +69,7 @@ def data_folder(given: Path | None) -> Path:
 
 def ltwh(box: np.ndarray) -> np.ndarray:
     """x1 y1 x2 y2 boxes (N, 4) as left, top, width, height (what `spatial.iou` takes)."""
-    box = np.asarray(box, float).reshape(-1, 4)
-    return np.column_stack([box[:, :2], box[:, 2:] - box[:, :2]])
+    return to_ltwh(np.asarray(box, float).reshape(-1, 4), "xyxy")
 
 
 def overlaps(truth: np.ndarray, boxes: np.ndarray) -> np.ndarray:

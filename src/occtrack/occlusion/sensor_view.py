@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from occtrack.occlusion._occlusion import _occluder_boxes
 from occtrack.occlusion.base import OcclusionContext, OcclusionTerms
 from occtrack.spatial import DENSE_PAIRS, overlapping_pairs
 
@@ -149,18 +150,13 @@ class SensorViewObjectWise:
         occluders = np.flatnonzero(r > self.min_existence)
         if K == 0 or len(occluders) == 0:
             return OcclusionTerms(np.ones(K), np.zeros(K))
-        boxes = ctx.measurement_model.predicted_edges(ctx.means)
-        owner = np.asarray(ctx.owner)
-        weights = np.asarray(ctx.weights, dtype=float)
-        position = np.full(max(len(r), 1), -1)
-        position[occluders] = np.arange(len(occluders))
-        own = np.where(owner >= 0, position[np.maximum(owner, 0)], -1)
-        mine = own >= 0
-        total = np.bincount(own[mine], weights=weights[mine], minlength=len(occluders))
-        mean_boxes = np.stack([
-            np.bincount(own[mine], weights=weights[mine] * boxes[mine, a, e],
-                        minlength=len(occluders)) for a in (0, 1) for e in (0, 1)],
-            axis=-1).reshape(-1, 2, 2) / np.maximum(total, 1e-300)[:, None, None]
+        # each occluder's mean box and each component's own object among them: the image
+        # boxes' kernel (`occtrack.occlusion.box_objectwise`), as the edges have the same layout
+        boxes = np.ascontiguousarray(ctx.measurement_model.predicted_edges(ctx.means),
+                                     dtype=float)
+        mean_boxes, own = _occluder_boxes(
+            boxes, np.ascontiguousarray(ctx.weights, dtype=float),
+            np.ascontiguousarray(ctx.owner, dtype=np.int64), occluders)
         visible = self.geometry.visible(boxes, mean_boxes, weights=r[occluders], skip=own,
                                         dense=not ctx.gating)
         return OcclusionTerms(visible, np.zeros(K))
