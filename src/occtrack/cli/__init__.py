@@ -37,6 +37,7 @@ COMMANDS = (
     "calibrate",
     "demo",
     "eval",
+    "eval_scans",
     "foursquare",
     "lidar",
     "render",

@@ -1,4 +1,4 @@
-"""`occtrack track-scans SCANS -o TRACKS`: the lidar scan tracker on a scan file."""
+"""`occtrack track-scans SCANS -o TRACKS`: the lidar scan tracker on a scan file or a ROS bag."""
 
 from __future__ import annotations
 
@@ -12,9 +12,11 @@ SCAN_OCCLUSION_NAMES = ("none", "measurement-wise")
 SCAN_LIKELIHOOD_NAMES = ("derived", "hand-made", "cluster")
 """`occtrack.config.scan`'s names, repeated so that `--help` loads no tracker (a test keeps
 them equal)."""
+BAG_STAMPS = ("record", "header")  # occtrack.io.rosbag.STAMPS
+BAG_OPTIONS = ("topic", "fixed_frame", "stamps")
 
 NAME = "track-scans"
-HELP = "track people through a 2-D lidar scan file (PMB tracker with occlusion)"
+HELP = "track people through a 2-D lidar scan file or ROS bag (PMB tracker with occlusion)"
 DESCRIPTION = """\
 Track people (discs) through a 2-D lidar scan file with the scan tracker (the box tracker's
 Poisson multi-Bernoulli filter fed whole scans, occtrack.tracker.ScanTracker), and write a
@@ -32,6 +34,19 @@ time,angle,range: seconds, radians counter-clockwise from the sensor's heading, 
 where the beam returned nothing; the beams of a scan share its time and come in increasing
 angle; # lines are comments. Beams a scan and the scan rate come from the file (the rate
 from the median time between scans). A malformed row stops the run with the file and line.
+
+SCANS may also be a ROS bag (needs the ros extra: pip install "occtrack[ros]"): a ROS 1 .bag
+file, a ROS 2 bag folder (holding metadata.yaml), or its .db3 or .mcap file. Its
+sensor_msgs/LaserScan messages are the scans (--topic chooses when it has several): beam k at
+angle_min + k angle_increment (reversed when angle_increment < 0), ranges as sent, inf for no
+return. A reading REP 117 calls invalid (nan, -inf, or outside [range_min, range_max]) says
+nothing about its beam and counts as no return, with a warning giving the count. A scan's
+time is the bag's record time, the clock the benchmark annotations of recorded bags use
+(a header stamp may come from another machine's clock); --stamps header takes header.stamp.
+The sensor's range_max is the tracker's max_range unless the --config file sets max_range.
+The tracks are in the scanner's frame (header.frame_id), unless --fixed-frame FRAME gives
+the sensor's pose a scan in FRAME from the bag's /tf and /tf_static transforms (or a
+nav_msgs/Odometry topic), interpolated to each scan's time.
 
 The sensor stands at the origin heading along +x unless --poses gives its pose a scan, a
 time,x,y,heading file with one row a scan at the scans' times (occtrack simulate lidar writes
@@ -65,13 +80,24 @@ to standard error). One input gives the same file byte for byte."""
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scans", metavar="SCANS",
                         help="lidar scan file (time,angle,range rows; occtrack simulate "
-                             "lidar's scans.csv)")
+                             "lidar's scans.csv), or a ROS bag: a .bag file, a ROS 2 bag "
+                             "folder, a .db3 or .mcap file")
     parser.add_argument("-o", "--output", metavar="TRACKS", required=True,
                         help="where to write the tracks file ('-': standard output)")
     parser.add_argument("--poses", metavar="FILE",
                         help="the sensor's pose a scan, time,x,y,heading rows (occtrack "
                              "simulate lidar writes one: sensor.csv); default: at the origin, "
                              "heading 0")
+    parser.add_argument("--topic", metavar="TOPIC",
+                        help="with a bag: its sensor_msgs/LaserScan topic (default: its only "
+                             "one)")
+    parser.add_argument("--fixed-frame", metavar="FRAME",
+                        help="with a bag: the world frame; the sensor's pose a scan comes from "
+                             "the bag's /tf, /tf_static or odometry (default: tracks in the "
+                             "scanner's frame)")
+    parser.add_argument("--stamps", choices=BAG_STAMPS, default=None,
+                        help="with a bag: a scan's time, the bag's record time or the "
+                             "message's header stamp (default: record)")
     parser.add_argument("--occlusion", choices=SCAN_OCCLUSION_NAMES, default=None,
                         help="occlusion model (default: measurement-wise, or the config "
                              "file's)")
@@ -83,17 +109,17 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
 
 
-def build_config(args: argparse.Namespace):
+def build_config(args: argparse.Namespace, defaults: dict | None = None):
     """The tracker settings (a ScanTrackerConfig) from the config file's [scan] table and the
-    flags."""
+    flags; `defaults` (a bag's max_range) beneath both."""
     from occtrack.config import load_toml
     from occtrack.config.scan import ScanTrackerConfig, scan_table
 
-    values: dict = {}
+    values: dict = dict(defaults or {})
     source = "command line"
     if args.config:
         source = args.config
-        values = scan_table(load_toml(args.config), source)
+        values.update(scan_table(load_toml(args.config), source))
     if args.occlusion is not None:
         values["occlusion"] = args.occlusion
     if args.likelihood is not None:
@@ -102,6 +128,32 @@ def build_config(args: argparse.Namespace):
         raise OcctrackError("likelihood cluster (points, no beams) goes with occlusion none; "
                             "pass --occlusion none", source)
     return ScanTrackerConfig.from_dict(values, source)
+
+
+SIMULATED = {"person_radius": "radius", "max_range": "max_range", "p_d": "p_d",
+             "range_noise": "range_noise", "clutter_per_scan": "clutter_per_scan"}
+"""The settings `occtrack simulate lidar` writes in a scan file's comments, and the tracker
+settings they give."""
+
+
+def recording_defaults(scans, info) -> dict:
+    """What the recording says of its sensor, beneath the --config file and the flags: a
+    bag's range_max; a simulated scan file's sensor and its people, discs of person_radius
+    (`occtrack simulate lidar` writes them in its comments). Anything else is a laser at leg
+    height and gets the tracker's defaults."""
+    if info is not None:
+        return {"max_range": info.range_max} if 0 < info.range_max <= 100_000 else {}
+    if "person_radius" not in scans.settings:
+        return {}
+    out: dict = {"body": "disc"}
+    for key, name in SIMULATED.items():
+        if key in scans.settings:
+            try:
+                out[name] = float(scans.settings[key])
+            except ValueError:
+                raise OcctrackError(f"the comment's {key}={scans.settings[key]} is not a "
+                                    f"number", scans.path) from None
+    return out
 
 
 def world_scans(scans, poses):
@@ -114,25 +166,47 @@ def world_scans(scans, poses):
             yield t, poses[i, 2] + angle, ranges, poses[i, :2]
 
 
+def read_input(args: argparse.Namespace):
+    """(the scans, poses or None, what a bag held or None): a scan file's, checked beam by
+    beam, or a bag's (`occtrack.io.rosbag.BagScans`), with poses when --fixed-frame is given."""
+    from occtrack.io.rosbag import is_bag, read_bag_scans
+    from occtrack.io.scans import check_beam_order, read_scans
+
+    if is_bag(args.scans):
+        if args.poses is not None and args.fixed_frame is not None:
+            raise OcctrackError("--poses and --fixed-frame both give the sensor's pose; pass "
+                                "one of them")
+        return read_bag_scans(args.scans, args.topic, args.fixed_frame,
+                              args.stamps or "record")
+    given = [f"--{name.replace('_', '-')}" for name in BAG_OPTIONS
+             if getattr(args, name) is not None]
+    if given:
+        raise OcctrackError(f"{' and '.join(given)} go{'es' if len(given) == 1 else ''} with a "
+                            f"ROS bag (.bag, a ROS 2 bag folder, .db3, .mcap), and SCANS is a "
+                            f"scan file", args.scans)
+    scans = read_scans(args.scans)
+    check_beam_order(scans)
+    return scans, None, None
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from occtrack.io.atomic import check_output
-    from occtrack.io.scans import (
-        check_beam_order,
-        match_poses,
-        read_poses,
-        read_scans,
-        write_tracks,
-    )
+    from occtrack.io.scans import match_poses, read_poses, write_tracks
     from occtrack.progress import progress, summary
     from occtrack.tracker import ScanTracker
 
     check_output(args.output, args.force, (args.scans, args.config, args.poses))
     config = build_config(args)
-    scans = read_scans(args.scans)
-    check_beam_order(scans)
-    poses = None
+    scans, poses, info = read_input(args)
+    config = build_config(args, recording_defaults(scans, info))
+    if info is not None:
+        if info.invalid:
+            print(f"occtrack track-scans: warning: {args.scans}: {info.invalid} of "
+                  f"{info.scans * info.beams} readings of {info.topic} are invalid (nan, -inf "
+                  f"or outside [range_min, range_max], REP 117) and count as no return",
+                  file=sys.stderr)
     if args.poses is not None:
         times, poses = read_poses(args.poses)
         match_poses(scans, args.poses, times)

@@ -20,8 +20,22 @@ shape `disc` (length = width = its diameter) or `rect`; clear_beams: beams that 
 the object were it alone; visible_beams: beams whose first surface it is; occluded: 1 when
 clear_beams > 0 and visible_beams == 0 (fully occluded). sensor.csv: `time,x,y,heading`.
 
-tracks.csv (`occtrack track-scans`, `write_tracks`), one row a reported object a scan, world
-frame: `time,id,x,y,vx,vy,existence,confidence,occluded`.
+tracks.csv (`occtrack track-scans`, `write_tracks`; read by `read_tracks`), one row a
+reported object a scan, world frame:
+
+    time,id,x,y,vx,vy,existence,confidence,occluded
+
+time s (the scan's), id a whole number >= 0 kept by the object and seen at most once a scan,
+x, y m, vx, vy m/s, existence and confidence in [0, 1], occluded 0 or 1.
+
+ground_truth_people_tracks.csv of the leg-tracker benchmark (Leigh et al., ICRA 2015;
+`read_people`; see occtrack.metrics.leg_benchmark), one row a hand-clicked person:
+
+    bag_time,id,x,y,z
+
+bag_time the ROS bag's record time of the annotation, s (not a scan's time: the benchmark
+scores it against the last scan recorded at or before it), id a whole number >= 0, x, y, z m
+in the laser's frame. Times must not go back; `nan` is an error.
 
 Reading is vectorised (numpy parses every cell at once); only when that fails are the rows
 walked one by one to name the first bad cell.
@@ -42,6 +56,7 @@ TRUTH_COLUMNS = ("time", "id", "shape", "x", "y", "vx", "vy", "length", "width",
                  "clear_beams", "visible_beams", "occluded")
 POSE_COLUMNS = ("time", "x", "y", "heading")
 TRACK_COLUMNS = ("time", "id", "x", "y", "vx", "vy", "existence", "confidence", "occluded")
+PEOPLE_COLUMNS = ("bag_time", "id", "x", "y", "z")
 SHAPES = ("disc", "rect")
 
 
@@ -148,6 +163,40 @@ class Truth:
 
 
 @dataclass(frozen=True)
+class Tracks:
+    """A tracks file's rows as arrays (the fields of `occtrack.tracker.ScanTrackResult`, so
+    `write_tracks` writes it back): time, id, position (N, 2), velocity (N, 2), existence,
+    confidence, occluded (bool)."""
+
+    time: np.ndarray
+    id: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    existence: np.ndarray
+    confidence: np.ndarray
+    occluded: np.ndarray
+    path: str = ""
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+
+@dataclass(frozen=True)
+class People:
+    """The leg-tracker benchmark's annotated people as arrays: time (the bag's record time),
+    id, position (N, 2) and z (N,)."""
+
+    time: np.ndarray
+    id: np.ndarray
+    position: np.ndarray
+    z: np.ndarray
+    path: str = ""
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+
+@dataclass(frozen=True)
 class _Table:
     """A CSV file's cells by column, the file line of each row and the comments' settings."""
 
@@ -225,11 +274,11 @@ def _finite(table: _Table, name: str) -> np.ndarray:
     return values
 
 
-def _time(table: _Table) -> np.ndarray:
-    t = _finite(table, "time")
+def _time(table: _Table, name: str = "time") -> np.ndarray:
+    t = _finite(table, name)
     back = np.r_[False, t[1:] < t[:-1]]
-    _first(table, back, lambda r: f"time {table.cells['time'][r]} is earlier than the row "
-                                  f"before ({table.cells['time'][r - 1]}): rows must be in "
+    _first(table, back, lambda r: f"{name} {table.cells[name][r]} is earlier than the row "
+                                  f"before ({table.cells[name][r - 1]}): rows must be in "
                                   f"time order")
     return t
 
@@ -284,6 +333,40 @@ def read_poses(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     table = _table(str(path), POSE_COLUMNS, "a lidar sensor pose file")
     pose = np.c_[_finite(table, "x"), _finite(table, "y"), _finite(table, "heading")]
     return _time(table), pose.reshape(-1, 3)
+
+
+def read_tracks(path: str | os.PathLike) -> Tracks:
+    """A tracks file (see the module docstring), checked row by row: besides the cells, an id
+    seen twice at one time is an error naming the second row's line."""
+    table = _table(str(path), TRACK_COLUMNS, "a tracks file (occtrack track-scans' output)")
+    time, ids = _time(table), _whole(table, "id", 0)
+    xy = np.c_[_finite(table, "x"), _finite(table, "y")].reshape(-1, 2)
+    v = np.c_[_finite(table, "vx"), _finite(table, "vy")].reshape(-1, 2)
+    share = {}
+    for name in ("existence", "confidence"):
+        share[name] = _finite(table, name)
+        _first(table, (share[name] < 0) | (share[name] > 1),
+               lambda r, name=name: f"{name} {table.cells[name][r]} is not in [0, 1]")
+    occluded = _whole(table, "occluded", 0)
+    _first(table, occluded > 1, lambda r: "occluded must be 0 or 1")
+    order = np.lexsort((np.arange(len(time)), ids, time))
+    again = np.zeros(len(time), bool)
+    again[order[1:]] = (np.diff(time[order]) == 0) & (np.diff(ids[order]) == 0)
+    _first(table, again, lambda r: f"id {ids[r]} appears twice at time "
+                                   f"{table.cells['time'][r]}: a tracks file reports an object "
+                                   f"once a scan")
+    return Tracks(time, ids, xy, v, share["existence"], share["confidence"],
+                  occluded.astype(bool), str(path))
+
+
+def read_people(path: str | os.PathLike) -> People:
+    """The leg-tracker benchmark's annotation file, `bag_time,id,x,y,z` (see the module
+    docstring), checked row by row."""
+    table = _table(str(path), PEOPLE_COLUMNS,
+                   "a people annotation file (bag_time,id,x,y,z rows)")
+    time = _time(table, "bag_time")
+    xy = np.c_[_finite(table, "x"), _finite(table, "y")].reshape(-1, 2)
+    return People(time, _whole(table, "id", 0), xy, _finite(table, "z"), str(path))
 
 
 def check_beam_order(scans: Scans) -> None:

@@ -67,6 +67,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 from scipy.special import ndtr
 
 from occtrack.models._models import _linearise, _other_beams
@@ -102,6 +103,15 @@ class Segments:
     box: np.ndarray
     segment_of_beam: np.ndarray
     offset: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    static: np.ndarray | None = None  # (M,) the probability each is static scene, if known
+
+    def points(self) -> tuple[np.ndarray, np.ndarray]:
+        """The returns of the segments in the world (P, 2) and the segment of each (P,)."""
+        r = self.range[self.beam]
+        u = np.c_[np.cos(self.angle[self.beam]), np.sin(self.angle[self.beam])]
+        keep = np.isfinite(r)  # (a bridged beam without a return has its neighbours' mean)
+        seg = np.repeat(np.arange(len(self)), np.diff(self.start))
+        return self.origin + r[keep][:, None] * u[keep], seg[keep]
 
     def __len__(self) -> int:
         return len(self.start) - 1
@@ -185,6 +195,36 @@ class ScanMeasurement:
         R = beam.max_range
         self.corner = np.asarray(origin, float) - R  # world point at the filter's (0, 0)
         self.region_size = np.full(2, 2.0 * R * self.unit)
+        self.view: tuple[np.ndarray, float, float, bool] | None = None  # the last scan's
+
+    def recentre(self, sensor: npt.ArrayLike) -> np.ndarray:
+        """Put the filter's square about `sensor` (world, m), so that the survival region
+        goes where the sensor goes; returns the shift (2,) that carries a point of the old
+        filter frame into the new one (filter units), for `GaussianMixturePMB.move_image`."""
+        corner = np.asarray(sensor, float) - self.beam.max_range
+        shift = (self.corner - corner) * self.unit
+        self.corner = corner
+        return shift
+
+    def in_view(self, means: np.ndarray) -> np.ndarray:
+        """Whether each filter state's centre (K,) lies in the last scan's field of view:
+        nearer than max_range and within the beams' angular span (all when no scan has been
+        seen). The filter's optional survival hook (`filters.gmpmb.interfaces`): a disc whose
+        centre leaves the view is gone from this sensor, as a box whose centre leaves the
+        image is, and takes `exit_survival`; so no track is reported where no beam looks."""
+        return self.sees(self.to_world(means)[0])
+
+    def sees(self, points: np.ndarray) -> np.ndarray:
+        """Whether each world point (K, 2) lies in the last scan's field of view (`in_view`)."""
+        if self.view is None:
+            return np.ones(len(points), dtype=bool)
+        origin, low, high, round_ = self.view
+        p = np.asarray(points, float).reshape(-1, 2) - origin
+        near = np.hypot(p[:, 0], p[:, 1]) < self.beam.max_range
+        if round_:
+            return near
+        off = np.abs(np.angle(np.exp(1j * (np.arctan2(p[:, 1], p[:, 0]) - (low + high) / 2))))
+        return near & (off <= (high - low) / 2)
 
     # -- frames ---------------------------------------------------------------------------
 
@@ -211,6 +251,10 @@ class ScanMeasurement:
         segments, each with the disc it fits and that fit's statistics."""
         # contiguous: the compiled kernels read the scan through pointers
         angle, origin = np.ascontiguousarray(angle, float), np.ascontiguousarray(origin, float)
+        if len(angle) > 1:  # the field of view: the beams' span (all round when it closes)
+            step = (angle[-1] - angle[0]) / (len(angle) - 1)
+            self.view = (origin.copy(), float(angle[0]), float(angle[-1]),
+                         bool(angle[-1] - angle[0] + 1.5 * step >= 2 * np.pi))
         ranges = np.where(np.asarray(ranges, float) < self.beam.max_range, ranges, np.inf)
         beam, start = cut(angle, ranges, self.beam.sigma, self.jump, self.gap)
         M = len(start) - 1
@@ -454,9 +498,11 @@ class ScanBirths:
     """Births where a segment is (`filters.gmpmb.interfaces.BirthModel`): each segment of at
     least `min_beams` beams adds a Poisson component at the disc it fits (still, `position_std`
     m and `speed_std` m/s about it), of mass `mass` (`edge_mass` within `edge_width` m of the
-    sensor's max range, where objects walk in; `initial_mass` at the first scan). A birth costs
-    nothing where an object already explains the segment: loopy BP gives the segment to it,
-    and the birth's miss child, unlabelled, fades."""
+    sensor's max range, where objects walk in; `initial_mass` at the first scan), times the
+    probability that the segment is not static scene where the tracker keeps a map of it
+    (`Segments.static`, `models.static_scene`). A birth costs nothing where an object already
+    explains the segment: loopy BP gives the segment to it, and the birth's miss child,
+    unlabelled, fades."""
 
     def __init__(self, model: ScanMeasurement, mass: float, edge_mass: float,
                  initial_mass: float, edge_width: float, position_std: float,
@@ -477,6 +523,8 @@ class ScanBirths:
         mass = np.where(edge, self.edge_mass, self.mass)
         if step == 0:
             mass = np.full(K, self.initial_mass)
+        if z.static is not None:  # a person is born where something moved (`static_scene`)
+            mass = mass * (1.0 - z.static[keep])
         means = np.zeros((K, 2, 3))
         means[:, :, 0] = model.to_filter(centre)
         means[:, :, 2] = model.radius * model.unit

@@ -32,7 +32,9 @@ from occtrack.models.beam import BeamModel
 from occtrack.models.point import PointMeasurement
 from occtrack.models.scan_hand_made import HandMadeScanMeasurement
 from occtrack.models.scan_segments import ScanBirths, ScanMeasurement
+from occtrack.models.static_scene import StaticScene
 from occtrack.occlusion.scan import scan_occlusion
+from occtrack.tracker.people import LegPairing
 
 HIDDEN_ABOVE = 0.5  # a missed object is reported hidden when occlusion more likely caused it
 
@@ -42,7 +44,7 @@ class ScanTracks:
     """The objects reported after one scan, n of them, sorted by id: ids (n,), positions and
     velocities (n, 2) in the world (m, m/s), existence and confidence (n,), occluded (n,)
     (missed this scan, and more likely hidden than not; never under occlusion "none") and
-    segment (n,) the index of the segment each took (-1: none)."""
+    segment (n,) the index of the segment each took (-1: none; a person: a leg's)."""
 
     ids: np.ndarray
     positions: np.ndarray
@@ -51,6 +53,7 @@ class ScanTracks:
     confidence: np.ndarray
     occluded: np.ndarray
     segment: np.ndarray
+    legs: np.ndarray | None = None  # (n, 2) with body "legs": each person's leg track ids
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -90,17 +93,20 @@ class ScanTracker:
                                     max_range=c.max_range)
         frame = (c.segment_jump, c.segment_gap, CENTIMETRES, tuple(self.origin))
         if c.likelihood == "cluster":
-            self.measurement = PointMeasurement(self.beam_model, c.radius, c.cluster_noise,
+            self.measurement = PointMeasurement(self.beam_model, c.disc_radius, c.cluster_noise,
                                                 c.clutter_per_scan, *frame)
         elif c.likelihood == "hand-made":
-            self.measurement = HandMadeScanMeasurement(self.beam_model, c.radius, *frame)
+            self.measurement = HandMadeScanMeasurement(self.beam_model, c.disc_radius, *frame)
         else:
-            self.measurement = ScanMeasurement(self.beam_model, c.radius, *frame)
+            self.measurement = ScanMeasurement(self.beam_model, c.disc_radius, *frame)
         births = ScanBirths(self.measurement, c.birth_mass, c.edge_birth_mass,
                             c.initial_birth_mass, c.edge_width, c.birth_position_std,
                             c.birth_speed_std, c.min_birth_beams)
         self.filter = GaussianMixturePMB(c.filter_config(self.rate), scan_occlusion(c.occlusion),
                                          self.measurement, births)
+        self.pairing = (LegPairing(c.leg_separation, c.leg_gate, c.leg_hold)
+                        if c.body == "legs" else None)
+        self.scene = StaticScene(c.max_range) if c.static_scene else None
         self._last_time: float | None = None
         self.segments = None
 
@@ -128,32 +134,55 @@ class ScanTracker:
                           f"({self.config.max_gap:g} s): every track ends and tracking starts "
                           f"afresh", stacklevel=2)
             serial = self.filter._next_serial
+            person = None if self.pairing is None else self.pairing._next
             self.reset()
             self.filter._next_serial = serial  # ids go on where they were, never reused
+            if person is not None:
+                self.pairing._next = person
             dt = 1.0 / self.rate
         self._last_time = t
         where = self.origin if origin is None else np.asarray(origin, float)
+        shift = self.measurement.recentre(where)  # the survival region goes with the sensor
         z = self.measurement.segments(angles, ranges, where)
+        if self.scene is not None:  # what stood there before this scan, then this scan
+            z.static = self.scene.static_probability(*z.points(), len(z))
+            self.scene.add_scan(where, angles, ranges)
         self.segments = z
-        self.filter.step(z, np.ones(len(z)), dt=dt)
+        camera = (np.ones(2), shift) if shift.any() else None
+        self.filter.step(z, np.ones(len(z)), camera=camera, dt=dt)
         return self.tracks()
 
     def tracks(self) -> ScanTracks:
+        """The objects reported now: the filter's discs, or with body "legs" the people its
+        legs make (`tracker.people`; a person's confidence is its surest leg's, its centre
+        within half a stride, `leg_separation` / 2, of the reported one)."""
         f, c = self.filter, self.config
         r, means, sd = f.object_moments()
         shown = np.flatnonzero(f.confirmed() & (r > c.report_existence))
         shown = shown[np.argsort(f.slot_serial[shown], kind="stable")]
         s = sd[shown] / self.measurement.unit
-        a = c.radius
+        a = c.radius if self.pairing is None else c.leg_separation / 2
         within = 1.0 - np.exp(-a * a / (2.0 * np.maximum(s[:, 0] * s[:, 1], 1e-12)))
         confidence = r[shown] * within
-        keep = confidence >= c.report_min_confidence
-        shown, confidence = shown[keep], confidence[keep]
         pos, vel = self.measurement.to_world(means[shown])
+        # a centre the update put beyond the view's edge (a leg seen by the last beams) is
+        # not reported: nothing is reported where no beam looks
+        keep = (confidence >= c.report_min_confidence) & self.measurement.sees(pos)
+        shown, confidence, pos, vel = shown[keep], confidence[keep], pos[keep], vel[keep]
         took = f.slot_detection[shown]
         hidden = (took < 0) & (f.slot_hidden[shown] > HIDDEN_ABOVE)
-        return ScanTracks(f.slot_serial[shown].copy(), pos, vel, r[shown].copy(), confidence,
-                          hidden, took.copy())
+        if self.pairing is None:
+            return ScanTracks(f.slot_serial[shown].copy(), pos, vel, r[shown].copy(),
+                              confidence, hidden, took.copy())
+        people = self.pairing.update(self._last_time or 0.0, f.slot_serial[shown], pos, vel,
+                                     r[shown], confidence, hidden)
+        people = people.select(self.measurement.sees(people.positions))
+        segment = np.full(len(people), -1, dtype=np.int64)
+        leg_took = dict(zip(f.slot_serial[shown].tolist(), took.tolist(), strict=True))
+        for i, legs in enumerate(people.legs.tolist()):
+            segment[i] = max(leg_took.get(leg, -1) for leg in legs)
+        return ScanTracks(people.ids, people.positions, people.velocities, people.existence,
+                          people.confidence, people.occluded, segment, people.legs)
 
     def run(self, scans: Iterable) -> ScanTrackResult:
         """Track every scan of `scans`: (time, world angles, ranges) or (time, angles,

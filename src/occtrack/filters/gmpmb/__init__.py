@@ -383,6 +383,21 @@ class GaussianMixturePMB:
                       self.detectability.stationary, self._memories[0],
                       self.occludability.stationary, self._memories[1], self.image_size,
                       self.survival_inside, self.config.exit_survival)
+        in_view = getattr(self.measurement, "in_view", None)
+        if in_view is not None:  # (optional: a sensor whose view is not the whole region)
+            self._leave_view(in_view)
+
+    def _leave_view(self, in_view) -> None:
+        """Components inside the region but outside the sensor's view (the measurement
+        model's `in_view`) survive as those outside the region do: times exit_survival, not
+        the survival inside."""
+        n = self.n
+        mean = self.mean[:n]
+        inside = np.all((mean[:, :, 0] >= 0) & (mean[:, :, 0] <= self.image_size)
+                        & (mean[:, :, 2] >= 1.0), axis=1)
+        gone = inside & ~in_view(mean)
+        if gone.any():
+            self.mass[:n][gone] *= self.config.exit_survival / self.survival_inside
 
     def _recycle_unplaced(self) -> None:
         """Recycle into the Poisson part every object undetected at its last update whose

@@ -11,12 +11,15 @@ model's frame (`region_size`: components whose centre leaves [0, W] x [0, H] tak
 (M, 2, 2), segments of a scan); the filter only takes `len(z)` and hands `z` back to the model,
 and to the occlusion model through `OcclusionContext.measurements`.
 
-Two methods are optional (the filter calls them where the model has them):
+Three methods are optional (the filter calls them where the model has them):
 `tracked_components(labelled)` before a frame's likelihoods, with `labelled` (K,) bool marking
 the components of tracked objects (the rest are the Poisson part), for a model whose likelihood
-differs between them; and `learn_association(label, taken, confirmed, dt)` after the frame's
+differs between them; `learn_association(label, taken, confirmed, dt)` after the frame's
 association, for a model that learns from the detections the tracks took (the box model's heavy
-tail does both, `occtrack.models.edge_tail`).
+tail does both, `occtrack.models.edge_tail`); and `in_view(means)` (K,) bool after the
+prediction, for a sensor that sees less than the region (a lidar's beams span and range,
+`occtrack.models.scan_segments`): a component out of view takes `exit_survival`, as one out of
+the region does.
 """
 
 from __future__ import annotations
