@@ -3,14 +3,16 @@
 The room: walls as line segments and posts as discs; a sensor like the leg-tracker benchmark's
 (245 beams over 86 degrees, 10 Hz, 5.6 m) drives a known path, straight at 0.8 m/s, then a
 left turn at 30 deg/s and 0.5 m/s, then straight at 1 m/s, 100 scans in all; Gaussian range
-noise of 1 cm, fixed seed.
+noise of 1 cm, fixed seeds. Part of the path looks at a wall, two posts and a far corner
+only, a view that pins the motion weakly: a fair test of a narrow-view scanner.
 
 Tolerance: 5 cm and 1 degree after 100 scans (10 s, about 8 m). A match's error with 1 cm range
-noise on a couple of hundred points is about a millimetre and a few hundredths of a degree;
-the map is re-anchored every 0.2 m or 5 degrees, so some 40 such errors add up as a random
-walk (about a centimetre and a quarter of a degree). 5 cm / 1 degree leaves room for that and
-for the normals' small bias, while a single failed match (the sensor moves 10 cm and 3 degrees a
-scan at the most) or a wrong one (a scan aligned to the wrong wall) is far outside it.
+noise on one or two hundred points is a few millimetres and a few hundredths of a degree; the
+map is re-anchored every 0.2 m or 5 degrees, so some 40 such errors add up as a random walk.
+Over 12 seeds, with and without the person, the worst error seen was 3.1 cm and 0.5 degree.
+5 cm / 1 degree leaves room for that, while a single failed match (the sensor moves 10 cm and
+3 degrees a scan at the most) or a wrong one (a scan aligned to the wrong wall, or dragged
+along by the person) is outside it.
 """
 
 from __future__ import annotations
@@ -161,10 +163,10 @@ def test_person_crossing_does_not_drag():
     truth = path()
     angles = beam_angles()
     scans = simulate(truth, angles, seed=2, person=crossing)
-    # the person is really in view, and covers a good part of it at times
-    blocked = [np.isfinite(ray_cast(p, angles, crossing(k))).mean()
-               for k, p in enumerate(truth)]
-    assert max(blocked) > 0.15
+    # the person is really in view: at times the first surface of a sixth of the beams
+    hidden = [np.mean(ray_cast(p, angles, np.r_[POSTS, crossing(k)]) != ray_cast(p, angles))
+              for k, p in enumerate(truth)]
+    assert max(hidden) > 0.15 and sum(h > 0 for h in hidden) > 20
     estimate = run(scans, angles)
     position, heading = errors(estimate, truth)
     assert position.max() < POSITION_TOLERANCE, position.max()

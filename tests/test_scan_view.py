@@ -117,7 +117,7 @@ def test_a_moving_sensor_keeps_its_tracks_wherever_it_goes():
 
 
 def test_leg_pairing_reports_a_person_at_the_midpoint_and_keeps_its_id():
-    pairing = LegPairing(separation=0.8, gate=0.5, hold=1.0)
+    pairing = LegPairing(separation=0.8, gate=0.5, hold=1.0, pairs_only=False)
 
     def step(t, ids, pos):
         pos = np.asarray(pos, float).reshape(-1, 2)
@@ -149,7 +149,7 @@ def test_leg_pairing_reports_a_person_at_the_midpoint_and_keeps_its_id():
 
 
 def test_leg_pairing_never_reuses_an_id_and_checks_its_settings():
-    pairing = LegPairing(hold=1.0)
+    pairing = LegPairing(hold=1.0, pairs_only=False)
     last: dict[int, float] = {}  # person id -> when last reported
     rng = np.random.default_rng(0)
     for step in range(200):
@@ -162,6 +162,7 @@ def test_leg_pairing_never_reuses_an_id_and_checks_its_settings():
         assert len(set(legs)) == len(legs)  # a leg is one person's
         assert set(legs) == set(ids.tolist())  # every leg is someone's
         assert set(people.ids.tolist()) == {k for k, v in pairing.members.items() if v}
+
         shown = people.legs[people.legs >= 0]
         assert set(shown.tolist()) <= set(legs)
         # nobody is reported within half a stride of another
@@ -200,3 +201,18 @@ def test_a_person_on_two_legs_is_one_track_at_the_midpoint():
         assert np.linalg.norm(positions[0] - mid) < 0.1
     assert len({int(ids[0]) for _, ids, _ in reported["legs"]}) == 1
     assert all(len(ids) == 2 for _, ids, _ in reported["disc"])
+
+
+def test_a_lone_leg_is_not_a_person_until_a_second_joins_it():
+    pairing = LegPairing(separation=0.8, pairs_only=True)
+    one = pairing.update(0.0, np.array([1]), np.array([[2.0, 0.0]]), np.zeros((1, 2)),
+                         np.ones(1), np.ones(1))
+    assert len(one) == 0 and pairing.members == {1: (1,)}
+    two = pairing.update(0.1, np.array([1, 2]), np.array([[2.0, 0.0], [2.0, 0.3]]),
+                         np.zeros((2, 2)), np.ones(2), np.ones(2))
+    assert two.ids.tolist() == [1]
+    # once paired, a person stays reported on one leg
+    again = pairing.update(0.2, np.array([1]), np.array([[2.05, 0.0]]), np.zeros((1, 2)),
+                           np.ones(1), np.ones(1))
+    assert again.ids.tolist() == [1]
+    np.testing.assert_allclose(again.positions[0], [2.05, 0.0])

@@ -169,3 +169,38 @@ def test_the_command_names_match_the_tracker_settings():
 
     assert SCAN_OCCLUSION_NAMES == scan.SCAN_OCCLUSION_NAMES
     assert SCAN_LIKELIHOOD_NAMES == scan.SCAN_LIKELIHOOD_NAMES
+
+
+def test_ego_motion_by_scan_matching_tracks_in_the_first_scans_frame(scene, tmp_path, capsys):
+    out = tmp_path / "matched.csv"
+    args = ["track-scans", str(scene / "scans.csv"), "-o", str(out), "--quiet",
+            "--ego-motion", "scan-matching"]
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("occtrack track-scans: note: scan matching matched ")
+    assert err.endswith(" of 60 scans; the others took the constant-velocity guess\n")
+    assert out.read_text().startswith(HEADER + "\n")
+    # poses given and estimated at once is refused in one line
+    assert track_scans(scene, tmp_path / "both.csv", "--ego-motion", "scan-matching") == 1
+    assert "--ego-motion scan-matching estimates the poses" in one_error_line(capsys)
+
+
+def test_the_recording_says_what_its_sensor_and_people_are(tmp_path):
+    """A simulated file's comments give its sensor and its disc people; any other recording
+    is a real laser at leg height (people on two legs), a bag with its range_max."""
+    from types import SimpleNamespace
+
+    from occtrack.cli.track_scans import recording_defaults
+    from occtrack.errors import OcctrackError
+
+    simulated = SimpleNamespace(settings={"person_radius": "0.3", "max_range": "15",
+                                          "p_d": "0.9", "seed": "4"}, path="s.csv")
+    assert recording_defaults(simulated, None) == {"body": "disc", "radius": 0.3,
+                                                   "max_range": 15.0, "p_d": 0.9}
+    assert recording_defaults(SimpleNamespace(settings={}, path="own.csv"), None) == {
+        "body": "legs"}
+    bag = SimpleNamespace(range_max=5.6)
+    assert recording_defaults(None, bag) == {"body": "legs", "max_range": 5.6}
+    bad = SimpleNamespace(settings={"person_radius": "wide"}, path="s.csv")
+    with pytest.raises(OcctrackError, match="person_radius=wide is not a number"):
+        recording_defaults(bad, None)

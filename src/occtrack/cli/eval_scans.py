@@ -34,7 +34,7 @@ line.
 A tracks file has no row for a scan where nothing was reported, so such a scan is not one of
 its times, and a position annotated then would be scored against the scan before it (a
 warning counts the gaps longer than 1.5 scan periods). --scans SCANS, the scan file the
-tracks came from (time,angle,range rows), adds every scan, empty or not.
+tracks came from (time,angle,range rows, or the ROS bag), adds every scan, empty or not.
 
 Prints a table (valid, ID sw, misses, FP, MOTP m, MOTA, MOTA-FP, tracks/scan, FP/scan) and a
 one-line summary. --json FILE writes the scores as one JSON object (replaced atomically; an
@@ -66,8 +66,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("tracks", metavar="TRACKS",
                         help="tracks file (occtrack track-scans' output)")
     parser.add_argument("--scans", metavar="SCANS",
-                        help="the scan file the tracks came from, so that scans with no "
-                             "reported object count (default: the tracks file's times)")
+                        help="the scan file or ROS bag the tracks came from, so that scans "
+                             "with no reported object count (default: the tracks file's "
+                             "times)")
     parser.add_argument("--threshold", type=_threshold, default=0.75, metavar="M",
                         help="a track matches a person closer than this (default: 0.75 m, "
                              "the benchmark's)")
@@ -96,7 +97,10 @@ def run(args: argparse.Namespace) -> int:
     tracks = read_tracks(args.tracks)
     scan_time = None
     if args.scans is not None:
-        scan_time = read_scans(args.scans).time
+        from occtrack.io.rosbag import is_bag, read_bag_scans
+
+        scan_time = (read_bag_scans(args.scans)[0] if is_bag(args.scans)
+                     else read_scans(args.scans)).time
         stray = np.setdiff1d(np.round(tracks.time, 6), np.round(scan_time, 6))
         if len(stray):
             raise OcctrackError(f"time {stray[0]:.6f} is no scan's time in {args.scans} "

@@ -40,7 +40,7 @@ file, a ROS 2 bag folder (holding metadata.yaml), or its .db3 or .mcap file. Its
 sensor_msgs/LaserScan messages are the scans (--topic chooses when it has several): beam k at
 angle_min + k angle_increment (reversed when angle_increment < 0), ranges as sent, inf for no
 return. A reading REP 117 calls invalid (nan, -inf, or outside [range_min, range_max]) says
-nothing about its beam and counts as no return, with a warning giving the count. A scan's
+nothing about its beam and is left out of its scan, with a warning giving the count. A scan's
 time is the bag's record time, the clock the benchmark annotations of recorded bags use
 (a header stamp may come from another machine's clock); --stamps header takes header.stamp.
 The sensor's range_max is the tracker's max_range unless the --config file sets max_range.
@@ -98,6 +98,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--stamps", choices=BAG_STAMPS, default=None,
                         help="with a bag: a scan's time, the bag's record time or the "
                              "message's header stamp (default: record)")
+    parser.add_argument("--ego-motion", choices=("none", "scan-matching"), default="none",
+                        help="without poses: none (the sensor taken as still; the default) or "
+                             "scan-matching (the sensor's motion estimated from the scans, "
+                             "occtrack.models.scan_matching; the tracks then in the first "
+                             "scan's frame)")
     parser.add_argument("--occlusion", choices=SCAN_OCCLUSION_NAMES, default=None,
                         help="occlusion model (default: measurement-wise, or the config "
                              "file's)")
@@ -138,13 +143,14 @@ settings they give."""
 
 def recording_defaults(scans, info) -> dict:
     """What the recording says of its sensor, beneath the --config file and the flags: a
-    bag's range_max; a simulated scan file's sensor and its people, discs of person_radius
-    (`occtrack simulate lidar` writes them in its comments). Anything else is a laser at leg
-    height and gets the tracker's defaults."""
+    simulated scan file's sensor and its people, discs of person_radius (`occtrack simulate
+    lidar` writes them in its comments); anything else is a real laser at leg height, whose
+    people are pairs of legs (body "legs"), and a bag gives its range_max."""
     if info is not None:
-        return {"max_range": info.range_max} if 0 < info.range_max <= 100_000 else {}
+        legs = {"body": "legs"}
+        return {**legs, "max_range": info.range_max} if 0 < info.range_max <= 100_000 else legs
     if "person_radius" not in scans.settings:
-        return {}
+        return {"body": "legs"}
     out: dict = {"body": "disc"}
     for key, name in SIMULATED.items():
         if key in scans.settings:
@@ -154,6 +160,26 @@ def recording_defaults(scans, info) -> dict:
                 raise OcctrackError(f"the comment's {key}={scans.settings[key]} is not a "
                                     f"number", scans.path) from None
     return out
+
+
+def matched_poses(args: argparse.Namespace, scans, poses):
+    """The sensor's poses a scan estimated by scan matching (`--ego-motion scan-matching`),
+    with a note of how many scans matched (the rest took the constant-velocity guess)."""
+    import numpy as np
+
+    from occtrack.models.scan_matching import ScanMatcher
+
+    if poses is not None:
+        raise OcctrackError("--ego-motion scan-matching estimates the poses that --poses or "
+                            "--fixed-frame give; pass one of them")
+    matcher = ScanMatcher()
+    out, matched = [], 0
+    for _, angles, ranges in scans:
+        out.append(matcher.update(angles, ranges))
+        matched += matcher.status == "matched"
+    print(f"occtrack track-scans: note: scan matching matched {matched} of {len(scans)} scans; "
+          f"the others took the constant-velocity guess", file=sys.stderr)
+    return np.array(out, dtype=float).reshape(-1, 3)
 
 
 def world_scans(scans, poses):
@@ -205,11 +231,13 @@ def run(args: argparse.Namespace) -> int:
         if info.invalid:
             print(f"occtrack track-scans: warning: {args.scans}: {info.invalid} of "
                   f"{info.scans * info.beams} readings of {info.topic} are invalid (nan, -inf "
-                  f"or outside [range_min, range_max], REP 117) and count as no return",
+                  f"or outside [range_min, range_max], REP 117) and are left out",
                   file=sys.stderr)
     if args.poses is not None:
         times, poses = read_poses(args.poses)
         match_poses(scans, args.poses, times)
+    if args.ego_motion == "scan-matching":
+        poses = matched_poses(args, scans, poses)
     if len(scans) == 0:
         print(f"occtrack track-scans: warning: {args.scans} holds no scans, so the result has "
               f"no tracks", file=sys.stderr)

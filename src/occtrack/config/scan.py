@@ -62,7 +62,8 @@ class ScanTrackerConfig:
     people); "legs", a laser at leg height, a person is two legs, each tracked as a disc of
     `leg_radius` m and paired into people (`occtrack.tracker.people.LegPairing`: legs at most
     `leg_separation` m apart, a person who lost both legs found again within `leg_gate` m for
-    `leg_hold` s), reported at the legs' midpoint.
+    `leg_hold` s), reported at the legs' midpoint (with `leg_pairs_only`, once seen on two
+    legs).
 
     `static_scene`: keep an occupancy grid of what stands still (`models.static_scene`) and
     give a segment's birth the probability that it is not part of it, so walls and posts do
@@ -110,6 +111,7 @@ class ScanTrackerConfig:
     leg_separation: float = 0.8
     leg_gate: float = 0.5
     leg_hold: float = 1.0
+    leg_pairs_only: bool = True
     static_scene: bool = False
     segment_jump: float = 0.3
     segment_gap: int = 1
@@ -193,12 +195,7 @@ class ScanTrackerConfig:
             confirm_window=self.confirm_window, report_existence=self.report_existence,
             report_min_confidence=0.0, gate_sigmas=self.gate_sigmas,
             birth_speed_std=self.birth_speed_std / h, inward_speed=0.0,
-            identity_spread=math.inf,  # (at 1.2 it bridges 153 of 191 full occlusions, not 182)
-            # a component lighter than a tenth of one scan's birth at a segment is dropped:
-            # the undetected people behind a wall, born there scan after scan, would
-            # otherwise pile up (at the filter's 1e-5, three times the components and half
-            # the speed on a real robot's recording, the same tracks)
-            prune_mass=self.birth_mass / 10)
+            identity_spread=math.inf)  # (at 1.2 it bridges 153 of 191 full occlusions, not 182)
 
 
 def scan_table(data: dict, source: str = "configuration") -> dict:

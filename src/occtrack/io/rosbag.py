@@ -10,9 +10,13 @@ One sensor_msgs/msg/LaserScan message is one scan: beam k at angle_min + k angle
 its range as sent (float32, widened exactly to float64), the beams in increasing angle (a
 scanner turning clockwise, angle_increment < 0, has its beams reversed). REP 117 readings:
 `+inf` is no return and stays inf; `nan` (an invalid reading), `-inf` (too close) and a range
-outside [range_min, range_max] say nothing about the beam, and the tracker's beam model knows
-only "a return at range r" or "no return", so they become inf too, and are counted
-(`BagScans.invalid`). Every scan of the topic must have the beams of the first.
+outside [range_min, range_max] say nothing about the beam, so the beam is left out of its scan
+(the tracker's beam model then takes it as no evidence either way, and the segments close over
+it) and counted (`BagScans.invalid`). Read as "no return" instead, an invalid reading is
+evidence that nothing stands on the beam: on the leg-tracker benchmark's recording, where an
+eighth of the readings are invalid, mostly at the edges of legs, that cut legs into pieces
+and ended tracks (178 identity switches of the followed person against 219). Every message of
+the topic must have the beams of the first.
 
 A scan's time is, by default, the bag's record time (the recorder's clock when the message
 arrived), not its header stamp: annotations of recorded bags, such as the leg-tracker
@@ -189,7 +193,7 @@ def _read(reader, name: str, topic: str | None, fixed_frame: str | None,
         bad = np.isnan(r) | (r == -np.inf) | (np.isfinite(r) & ((r < msg.range_min)
                                                                  | (r > msg.range_max)))
         invalid += int(bad.sum())
-        rows.append(np.where(bad, np.inf, r))
+        rows.append(np.where(bad, np.nan, r))
         times.append(t)
         range_max = max(range_max, float(msg.range_max))
     if first is None:
@@ -204,9 +208,10 @@ def _read(reader, name: str, topic: str | None, fixed_frame: str | None,
         angle, ranges = angle[::-1], ranges[:, ::-1]
     frame = _frame(first.header.frame_id)
     time = np.array(times)
-    scans = Scans(time, np.arange(len(rows) + 1, dtype=np.int64) * n, np.tile(angle, len(rows)),
-                  ranges.reshape(-1), {"topic": topic, "frame_id": frame, "stamps": stamps},
-                  name)
+    valid = ~np.isnan(ranges)  # an invalid reading is left out: it says nothing of its beam
+    start = np.r_[0, np.cumsum(valid.sum(axis=1))].astype(np.int64)
+    scans = Scans(time, start, np.broadcast_to(angle, ranges.shape)[valid], ranges[valid],
+                  {"topic": topic, "frame_id": frame, "stamps": stamps}, name)
     info = BagScans(topic, frame, len(rows), n, float(angle.min()) if n else math.nan,
                     float(angle.max()) if n else math.nan, range_max, invalid, lasers)
     poses = None

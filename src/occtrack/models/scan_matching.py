@@ -3,64 +3,76 @@ odometry, so the scan tracker can put each scan in a fixed frame where walls and
 still.
 
 `ScanMatcher.update(angles, ranges)` takes one scan (beam angles in the sensor's frame, rad,
-increasing; ranges m, `inf`, `nan`, negative or out-of-range values meaning no return) and
-returns the sensor's pose (x, y, heading) in the frame of the first scan: x, y m, heading rad
-counter-clockwise, wrapped to [-pi, pi). `estimate_poses(scans)` runs it over an
-`occtrack.io.scans.Scans`, one pose a scan.
+increasing; ranges m; `inf`, `nan`, negative and out-of-range values are no return, finite
+ones the points) and returns the sensor's pose (x, y, heading) in the frame of the first scan:
+x, y m, heading rad counter-clockwise, wrapped to [-pi, pi). `estimate_poses(scans)` runs one
+over an `occtrack.io.scans.Scans`, a pose a scan.
 
-Method: point-to-line ICP (Censi, "An ICP variant using a point-to-line metric", ICRA 2008),
-in its linearised least-squares form, against a small local map:
+Method: point-to-line ICP (A. Censi, "An ICP variant using a point-to-line metric", ICRA
+2008), in its linearised least-squares form, against a small local map.
 
-- The map is the last `map_scans` keyframes, each a scan's points carried into the fixed frame
-  by its estimated pose. A scan becomes a keyframe (the map is re-anchored) when the sensor has
-  moved more than `keyframe_distance` (0.2 m) or turned more than `keyframe_angle` (5 deg)
-  since the last one, or when fewer than `min_overlap` of its points found a partner: a still
-  sensor matches every scan to the same keyframe and does not drift at all, a moving one
-  drifts by one match error a keyframe, not a scan.
-- Each map point carries a 2 x 2 information matrix W. A point on a surface gets W = n n^T,
-  n the normal of the line fitted (principal axes) to its neighbours along the scan: the beams
-  up to `normal_window` either side whose points lie within `normal_radius` of it, at least
-  three points, the smaller eigenvalue below `line_ratio` times the larger. An isolated return
-  or a blob that is no line (a thin post far away, foliage) gets W = `point_weight` I, plain
-  point-to-point. So the cost is sum_i e_i^T W_i e_i, e_i = R(h) p_i + t - q_i, with q_i the
-  map point nearest to the moved scan point p_i (`scipy.spatial.cKDTree`).
-- The search starts from the constant-velocity guess (the pose moved on by the last scan's
-  motion), and each iteration re-pairs the points and takes one Gauss-Newton step on
-  (x, y, heading); the rotation is re-linearised every iteration, so it is exact at
-  convergence. It stops after `iterations` steps or when a step moves less than 1e-5 m and
-  1e-6 rad.
-- Outliers: a pair farther apart than `max_distance` is none; of the rest, the worst `trim`
-  fraction is dropped, and so is any pair more than `outlier_factor` times the median distance
-  apart (never below `min_gate`). A person moving in view is the usual outlier: his points lie
-  tens of centimetres off what the map has there, so once the walls are aligned (within a
-  centimetre or two) they fall beyond the adaptive gate, or into the trimmed fraction, and do
-  not drag the estimate; only a person who covers most of the view, or walks exactly with the
-  sensor, can.
-- Failure: fewer than `min_correspondences` pairs, a degenerate geometry (a single straight
-  wall, a corridor: the smallest eigenvalue of the normal matrix, the heading's column scaled
-  by the points' mean range, below `min_condition` times the largest), a result that is not
-  finite or moved farther than 3 `max_distance` from the guess. Then the pose is the
-  constant-velocity guess with the motion decayed by `decay` (a sensor that sees nothing slows
-  to a standstill instead of flying off), and after `patience` failures in a row the map is
-  re-anchored on the current scan at that guess. It never raises for a scan's contents and
-  never returns NaN.
+- The map is the last `map_scans` (3) keyframes, each a scan's points carried into the fixed
+  frame by its estimated pose. A scan becomes a keyframe when the sensor has moved more than
+  `keyframe_distance` (0.2 m) or turned more than `keyframe_angle` (5 deg) since the last one,
+  or when fewer than `min_overlap` (half) of its points found a partner. A still sensor matches
+  every scan to the same keyframe and does not drift; a moving one drifts by one match's error
+  a keyframe, not a scan.
+- Each map point carries a 2 x 2 information matrix W: a point on a surface W = n n^T, n the
+  normal of the line fitted (principal axes) to its neighbours along its scan (the beams up to
+  `normal_window` either side whose points lie within `normal_radius` of it, three points at
+  least, the smaller scatter below `line_ratio` times the larger); an isolated return, or a
+  blob that is no line (foliage, a far thin post), W = `point_weight` I (point-to-point). The
+  cost is sum_i w_i e_i^T W_i e_i, e_i = R(h) p_i + t - q_i, q_i the map point nearest to the
+  moved scan point p_i (`scipy.spatial.cKDTree`); the rotation is re-linearised every
+  iteration, so the solution is exact at convergence.
+- The search starts at the constant-velocity guess (the last pose moved on by the last step)
+  and takes Gauss-Newton steps, up to `iterations` (20), with a Levenberg-Marquardt damping
+  (`damping` times the mean information, shrinking 0.3-fold an iteration) so the well-pinned
+  directions settle before a weakly pinned one moves, and a weak prior at the guess (`prior`)
+  that keeps what the points leave open. The pairs are looked up again only after the pose
+  moved by `requery` (5 mm); the search ends when a step moves less than 0.1 mm and 0.1 mrad.
+- Outliers: a pair farther apart than `max_distance` (0.3 m) is none. Of the rest, the worst
+  `trim` fraction (20 %) is dropped, but never a pair within `min_gate` (5 cm); so is any
+  pair more than `outlier_factor` (3) times the median residual off (again never within
+  `min_gate`); the rest get Cauchy weights w = 1 / (1 + r^2 / s^2), s = `kernel` (2) times
+  the median residual, at least `min_scale` (1 cm). Residuals are distances to the map
+  point's line (or to the point), in metres.
+- People: a person walking in view is the outlier a tracker's scans always have. His points
+  lie a step (10 cm and more at 1 m/s) off where the map saw him, so once the walls are
+  aligned they fall past the gate or into the trimmed fraction, and the Cauchy weights mute
+  the ones that still graze his old outline: a person crossing 1 to 4 m in front, hiding up
+  to a fifth of an 86-degree view, adds some millimetres to the error (at most 6 mm in the
+  tests' room, tests/test_scan_matching.py).
+  What trimming cannot undo is a person who walks with the sensor (a robot following him)
+  while the static scene pins the motion only weakly: his points then agree with "no motion"
+  and outvote the rest.
+- Failure: fewer than `min_correspondences` (10) pairs; a degenerate geometry (one straight
+  wall, a corridor, a few far returns: the smallest eigenvalue of the normal matrix, the
+  heading's row and column scaled by the points' root-mean-square range, below
+  `min_information` or `min_condition` times the largest; checked after the third iteration
+  too, to stop early); a result not finite, more than `max_distance` from the guess, or a
+  step longer than `max_step` (0.3 m) or `max_turn` (20 deg). The pose is then the
+  constant-velocity guess with the motion decayed by `decay` (0.8: a sensor that sees nothing
+  slows to a stop instead of flying off), and after `patience` (3) failures in a row the map
+  is re-anchored on the current scan at that guess. `update` never raises for what a scan
+  holds and never returns NaN.
 
-Not modelled: the motion during one sweep (a 10 Hz scanner sweeping 86 degrees in 24 ms moves
-2.4 cm at 1 m/s while it does; no de-skewing), loop closure (the pose drifts slowly, as every
-odometry does).
+Not modelled: the motion during a sweep (a 10 Hz scanner sweeping 86 degrees in 24 ms moves
+2.4 cm at 1 m/s while it does: no de-skewing) and loop closure (the pose drifts, slowly, as
+all odometry does).
 
-Speed: everything over points is vectorised with numpy; the Python work is a dozen calls an
-iteration and a tree rebuild a keyframe. About 0.5-1.5 ms a 245-beam scan on one core
-(more than 600 scans a second; `update`'s convergence usually takes 3 to 8 iterations).
+Speed: everything over points is vectorised; an iteration is some thirty numpy calls, a tree
+query every second or third, and a keyframe costs a tree build and the normals. About 2 ms a
+245-beam scan on one core of the project's machine under load (some 500 scans a second),
+three to eight iterations a scan.
 
-Why written by hand: scipy gives the KD-tree, the rest is a hundred lines of numpy. The pip
-packages that register point clouds are 3-D and heavier: kiss-icp (3-D lidar odometry with
-pydantic, typer and rich as dependencies), small_gicp and open3d (3-D, compiled, open3d some
-hundreds of MB), simpleicp (3-D point-to-plane, pulls pandas and lmfit); a 2-D scan fed to
-them as a flat 3-D cloud leaves the z axis and roll/pitch unconstrained. The one 2-D laser
-matcher on PyPI, karto-scanmatcher (OpenKarto's correlative matcher), is a single undocumented
-GPL-3 binary release; the other 2-D matchers (csm, laser_scan_matcher, cartographer) come with
-ROS.
+Why written by hand: scipy gives the KD-tree, the rest is numpy. The pip packages that
+register point clouds are 3-D and heavier: kiss-icp (3-D lidar odometry; pydantic, typer,
+rich), small_gicp and open3d (3-D, compiled; open3d hundreds of MB), simpleicp (3-D
+point-to-plane; pandas, lmfit); a 2-D scan given to them as a flat 3-D cloud leaves z, roll
+and pitch unconstrained. The one 2-D laser matcher on PyPI, karto-scanmatcher (OpenKarto's
+correlative matcher), is a single undocumented GPL-3 binary release; the rest (csm,
+laser_scan_matcher, cartographer) come with ROS.
 """
 
 from __future__ import annotations
@@ -101,9 +113,10 @@ def transform(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
 def scan_points(angles: np.ndarray, ranges: np.ndarray, min_range: float = 0.0,
                 max_range: float = math.inf) -> np.ndarray:
     """The returns of a scan as points (N, 2) in the sensor's frame, in beam order: finite
-    ranges in (min_range, max_range); inf, nan and the rest are no return."""
+    ranges in (min_range, max_range) at finite angles; inf, nan and the rest are no return."""
     with np.errstate(invalid="ignore"):
-        ok = np.isfinite(ranges) & (ranges > min_range) & (ranges < max_range)
+        ok = (np.isfinite(ranges) & (ranges > min_range) & (ranges < max_range)
+              & np.isfinite(angles))
     r, a = ranges[ok], angles[ok]
     return np.c_[r * np.cos(a), r * np.sin(a)]
 
@@ -116,18 +129,18 @@ def information(points: np.ndarray, window: int = 4, radius: float = 0.15,
     n = len(points)
     if n == 0:
         return np.zeros((0, 3))
-    k = np.arange(-window, window + 1)
-    idx = np.arange(n)[:, None] + k
-    inside = (idx >= 0) & (idx < n)
-    near = points[np.clip(idx, 0, n - 1)]  # (N, 2w+1, 2)
-    off = near - points[:, None, :]
-    use = inside & (np.einsum("nkd,nkd->nk", off, off) <= radius * radius)
+    padded = np.full((n + 2 * window, 2), np.nan)  # nan: no neighbour past either end
+    padded[window:window + n] = points
+    near = np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0)
+    ox, oy = near[:, 0] - points[:, :1], near[:, 1] - points[:, 1:]  # (N, 2w+1) offsets
+    with np.errstate(invalid="ignore"):
+        use = ox * ox + oy * oy <= radius * radius
     count = use.sum(axis=1)
-    mean = np.einsum("nk,nkd->nd", use, near) / count[:, None]
-    d = (near - mean[:, None, :]) * use[..., None]
-    sxx = np.einsum("nk,nk->n", d[..., 0], d[..., 0])
-    sxy = np.einsum("nk,nk->n", d[..., 0], d[..., 1])
-    syy = np.einsum("nk,nk->n", d[..., 1], d[..., 1])
+    ox, oy = np.where(use, ox, 0.0), np.where(use, oy, 0.0)
+    mx, my = ox.sum(axis=1) / count, oy.sum(axis=1) / count
+    sxx = (ox * ox).sum(axis=1) - count * mx * mx  # the scatter about the neighbours' mean
+    sxy = (ox * oy).sum(axis=1) - count * mx * my
+    syy = (oy * oy).sum(axis=1) - count * my * my
     half_gap = np.hypot(0.5 * (sxx - syy), sxy)
     big = 0.5 * (sxx + syy) + half_gap
     small = 0.5 * (sxx + syy) - half_gap
@@ -158,33 +171,43 @@ def solve3(a: float, b: float, c: float, d: float, e: float, f: float, u: float,
 _DAMPING_DECAY = 0.3
 _CONVERGED_DAMPING = 0.02
 _CONVERGED_STEP = 1e-4
+# the iteration after which a degenerate geometry ends the search
+_EARLY_CHECK = 3
 
 
 class ScanMatcher:
     """Online point-to-line ICP odometry of a 2-D laser (see the module docstring).
 
-    max_distance: m, a pair of points farther apart is an outlier (also the capture range
-        around the constant-velocity guess: the motion may differ from the last scan's by
-        about this much).
+    max_distance: m; a pair farther apart is an outlier, and the guess must be right to
+        about this much (the capture range).
     iterations: Gauss-Newton steps at most a scan.
-    trim: the worst fraction of the pairs within max_distance dropped every iteration.
-    outlier_factor, min_gate: pairs farther apart than outlier_factor times the median pair
-        distance (but never closer than min_gate m) are dropped too.
+    trim: the worst fraction of the pairs dropped (but never one within min_gate m).
+    outlier_factor, min_gate: pairs more than outlier_factor times the median residual off
+        (and more than min_gate m) are dropped too.
+    kernel, min_scale: the Cauchy weights' scale, kernel times the median residual, at
+        least min_scale m.
     keyframe_distance, keyframe_angle: m and rad of motion after which a scan becomes a
-        keyframe; map_scans: how many keyframes the local map keeps; min_overlap: a scan fewer
-        of whose points found a partner becomes a keyframe too.
-    min_correspondences: fewer pairs than this and the match fails.
-    min_condition: the scaled normal matrix's smallest to largest eigenvalue below this and
-        the match fails (degenerate geometry).
-    decay: the fraction of the last motion a failed match carries on with.
-    patience: failed matches in a row after which the map is re-anchored on the current scan.
-    normal_window, normal_radius, line_ratio, point_weight: the map points' normals
+        keyframe; map_scans: keyframes the local map keeps; min_overlap: a scan with fewer
+        of its points paired becomes a keyframe too.
+    min_correspondences: fewer pairs and the match fails.
+    min_condition, min_information: the scaled normal matrix's smallest eigenvalue below
+        min_condition times the largest, or below min_information (the information of that
+        many points on a line), and the match fails (degenerate geometry).
+    prior: the weight of the constant-velocity guess, in points' information.
+    damping: the first iteration's Levenberg-Marquardt damping, in mean information.
+    requery: m (heading at the points' range) the pose moves before the pairs are redone.
+    decay: the fraction of the last step a failed match carries on with.
+    patience: failed matches in a row after which the map is re-anchored on the scan.
+    max_step, max_turn: m and rad; a longer step from the last pose fails the match.
+    normal_window, normal_radius, line_ratio, point_weight: the map's normals
         (`information`).
-    min_range, max_range: m, returns outside (min_range, max_range) are no return.
+    min_range, max_range: m; returns outside (min_range, max_range) are no return.
 
     After `update`: `pose` (3,), `velocity` (the last step, in the previous pose's frame),
-    `status` ("first", "matched" or "guess"), `correspondences` (pairs used in the last
-    iteration), `fitness` (their mean distance, m; nan when unmatched), `keyframes` (count).
+    `status` ("first", "matched" or "guess"), `failure` (why a guess: "degenerate", "too
+    few pairs", ...; "" when matched), `correspondences` (pairs used at the end), `fitness`
+    (their mean distance, m; nan when unmatched), `eigenvalues` (of the scaled normal
+    matrix), `keyframes` (in the map).
     """
 
     def __init__(self, max_distance: float = 0.3, iterations: int = 20, trim: float = 0.2,
@@ -194,8 +217,8 @@ class ScanMatcher:
                  map_scans: int = 3, min_overlap: float = 0.5, min_correspondences: int = 10,
                  min_condition: float = 1e-3,
                  min_information: float = 0.5, prior: float = 0.04,
-                 damping: float = 0.3, requery: float = 0.002, decay: float = 0.8,
-                 patience: int = 3,
+                 damping: float = 0.3, requery: float = 0.005, decay: float = 0.8,
+                 patience: int = 3, max_step: float = 0.3, max_turn: float = 0.35,
                  normal_window: int = 4, normal_radius: float = 0.15, line_ratio: float = 0.1,
                  point_weight: float = 0.1, min_range: float = 0.0,
                  max_range: float = math.inf) -> None:
@@ -228,6 +251,8 @@ class ScanMatcher:
         self.requery = float(requery)
         self.decay = float(decay)
         self.patience = int(patience)
+        self.max_step = float(max_step)
+        self.max_turn = float(max_turn)
         self.normal_window = int(normal_window)
         self.normal_radius = float(normal_radius)
         self.line_ratio = float(line_ratio)
@@ -333,7 +358,7 @@ class ScanMatcher:
             moved = rotated + np.array([x0, x1])
             # the pairs are looked up again only when the pose has moved by more than
             # `requery` (m at the points' range) since they were: the tree's query is most of
-            # an iteration's cost, and a millimetre's move changes hardly a pair
+            # an iteration's cost, and a few millimetres' move changes few pairs
             if (queried is None or abs(x0 - queried[0]) + abs(x1 - queried[1])
                     + abs(x2 - queried[2]) * lever > self.requery):
                 dist, j = query(moved, distance_upper_bound=max_distance)
@@ -390,27 +415,43 @@ class ScanMatcher:
             if (damp < _CONVERGED_DAMPING and math.hypot(dx, dy) < _CONVERGED_STEP
                     and abs(dt) < _CONVERGED_STEP):
                 break
+            if iteration == _EARLY_CHECK and self._degenerate(h, lever):
+                return None, overlap  # hopeless: no need to iterate on
         x = np.array([x0, x1, x2])
-        hxx, hxy, hyy, hxt, hyt, htt = h
-        scaled = np.array([[hxx, hxy, hxt / lever], [hxy, hyy, hyt / lever],
-                           [hxt / lever, hyt / lever, htt / lever2]])
         self.fitness = float(dist[sel][use].mean())
         self.correspondences = used
-        lam = np.linalg.eigvalsh(scaled)
-        self.eigenvalues = lam
-        if not lam[0] > max(self.min_condition * lam[-1], self.min_information):
-            self.failure = "degenerate"
+        if self._degenerate(h, lever):
             return None, overlap
         if not np.all(np.isfinite(x)):
             self.failure = "singular"
             return None, overlap
         x[2] = wrap(x[2])
         step = between(guess, x)
-        if math.hypot(step[0], step[1]) > self.max_distance or abs(step[2]) > 0.5:
+        if math.hypot(step[0], step[1]) > self.max_distance or abs(step[2]) > self.max_turn:
             self.failure = "too far from the guess"
+            return None, overlap
+        step = between(self.pose, x)
+        if math.hypot(step[0], step[1]) > self.max_step or abs(step[2]) > self.max_turn:
+            self.failure = "too long a step"
             return None, overlap
         self.failure = ""
         return x, overlap
+
+
+    def _degenerate(self, h: tuple, lever: float) -> bool:
+        """Whether the normal matrix `h` (its six entries) leaves a direction open: its
+        smallest eigenvalue, with the heading's row and column divided by `lever` (the
+        points' root-mean-square range, so that the heading's information compares with the
+        translation's, both per metre), below `min_information` or `min_condition` times the
+        largest. Keeps the eigenvalues in `eigenvalues`."""
+        hxx, hxy, hyy, hxt, hyt, htt = h
+        lam = np.linalg.eigvalsh(np.array([[hxx, hxy, hxt / lever], [hxy, hyy, hyt / lever],
+                                           [hxt / lever, hyt / lever, htt / lever**2]]))
+        self.eigenvalues = lam
+        if lam[0] > max(self.min_condition * lam[-1], self.min_information):
+            return False
+        self.failure = "degenerate"
+        return True
 
 
 def estimate_poses(scans, matcher: ScanMatcher | None = None, **settings) -> np.ndarray:

@@ -20,11 +20,12 @@ Leigh et al., ICRA 2015):
 5. People closer than half a stride (`separation` / 2) are one person, the elder, who takes
    the younger's legs (a leg the filter tracks twice, a person's legs first seen apart).
 
-Reported: every person with a leg; position the midpoint of its two legs furthest apart (a
-leg tracked twice does not pull it), velocity the mean of its legs', and
-existence and confidence those of its likeliest leg (the probability that someone is there
-is at least that of its surest leg; the two legs of one person are not independent evidence
-of two people, so they are not combined as if they were).
+Reported: every person with a leg that has once had two (`pairs_only`: a lone leg-sized
+segment, a post, a bush, is not somebody until a second leg joins it); position the midpoint
+of its two legs furthest apart (a leg tracked twice does not pull it), velocity the mean of its
+legs', and existence and confidence those of its likeliest leg (the probability that
+someone is there is at least that of its surest leg; the two legs of one person are not
+independent evidence of two people, so they are not combined as if they were).
 
 Written by hand: no library pairs a tracker's leg tracks into people; the few lines of
 assignment use scipy's `linear_sum_assignment`.
@@ -71,6 +72,7 @@ class _Person:
     position: np.ndarray
     velocity: np.ndarray
     seen: float  # time its last leg was tracked
+    paired: bool = False  # ever seen on two legs
 
 
 def _outer(legs: np.ndarray) -> list[int]:
@@ -102,13 +104,17 @@ class LegPairing:
         gate: how far, m, a person who lost both legs may be found again by a new leg (plus
             its last velocity times the time since).
         hold: seconds a person without a leg is kept for a new leg to take up.
+        pairs_only: report a person only once it has been seen on two legs (a lone
+            leg-sized segment, a post or a bush, is not somebody until a second leg joins).
     """
 
-    def __init__(self, separation: float = 0.8, gate: float = 0.5, hold: float = 1.0):
+    def __init__(self, separation: float = 0.8, gate: float = 0.5, hold: float = 1.0,
+                 pairs_only: bool = True):
         for name, value in (("separation", separation), ("gate", gate), ("hold", hold)):
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be a non-negative number, not {value}")
         self.separation, self.gate, self.hold = float(separation), float(gate), float(hold)
+        self.pairs_only = bool(pairs_only)
         self.reset()
 
     def reset(self) -> None:
@@ -197,7 +203,9 @@ class LegPairing:
             rows = [row[leg] for leg in person.legs]
             person.velocity = velocities[rows].mean(axis=0)
             person.seen = time
-            out.append((key, rows))
+            person.paired |= len(rows) > 1
+            if person.paired or not self.pairs_only:
+                out.append((key, rows))
         return self._report(out, positions, velocities, np.asarray(existence, float),
                             np.asarray(confidence, float),
                             None if occluded is None else np.asarray(occluded, bool), ids)

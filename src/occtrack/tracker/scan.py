@@ -104,7 +104,7 @@ class ScanTracker:
                             c.birth_speed_std, c.min_birth_beams)
         self.filter = GaussianMixturePMB(c.filter_config(self.rate), scan_occlusion(c.occlusion),
                                          self.measurement, births)
-        self.pairing = (LegPairing(c.leg_separation, c.leg_gate, c.leg_hold)
+        self.pairing = (LegPairing(c.leg_separation, c.leg_gate, c.leg_hold, c.leg_pairs_only)
                         if c.body == "legs" else None)
         self.scene = StaticScene(c.max_range) if c.static_scene else None
         self._last_time: float | None = None
