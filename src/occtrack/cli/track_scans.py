@@ -67,9 +67,15 @@ people's radius, ...), e.g.
   occlusion = "measurement-wise"
   max_range = 30.0
 Flags given on the command line win over the file; an unknown table or setting stops the run.
-The defaults are the simulated sensor's (20 m range, 2 cm range noise, 5 clutter returns a
-scan, P_D 0.98, people of 0.25 m radius); a return at or beyond max_range counts as no return,
-with a warning giving the count.
+Beneath the file and the flags, the recording says what it can: a file occtrack simulate
+lidar wrote gives its sensor and its people, discs (body = "disc", radius its person_radius);
+any other recording is a real laser at leg height, whose people are pairs of legs (body =
+"legs": each leg tracked as a disc of leg_radius 0.1 m, the legs paired into people reported
+at their midpoint, occtrack.tracker.people), and a bag gives its range_max. The other
+defaults are the simulated sensor's (20 m range, 2 cm range noise, 5 clutter returns a scan,
+P_D 0.98). A return at or beyond max_range counts as no return, with a warning giving the
+count. Nothing is reported outside the field of view (the beams' span and range): a track
+whose centre leaves it is dropped as a box leaving an image is.
 
 The tracks file is written whole or not at all: to a temporary file beside it, renamed into
 place when complete, so an interrupted run leaves the old file (or none); an existing file

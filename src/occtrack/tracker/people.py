@@ -28,7 +28,7 @@ someone is there is at least that of its surest leg; the two legs of one person 
 independent evidence of two people, so they are not combined as if they were).
 
 Written by hand: no library pairs a tracker's leg tracks into people; the few lines of
-assignment use scipy's `linear_sum_assignment`.
+assignment use scipy's `linear_sum_assignment` and its k-d tree for the legs within a stride.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
 
 FAR = 1e9  # a cost no assignment takes
 
@@ -163,17 +164,17 @@ class LegPairing:
             taken = {leg for person in self._people.values() for leg in person.legs}
             free = [k for k in free if int(ids[k]) not in taken]
         # 3. the rest pair with each other, or stand alone
-        if len(free) > 1:
+        if len(free) > 1:  # (the pairs within a stride, from a k-d tree: no all-pairs table)
             p = positions[free]
-            d = np.hypot(*(p[:, None, :] - p[None, :, :]).transpose(2, 0, 1))
-            a, b = np.triu_indices(len(free), 1)
-            near = d[a, b] <= self.separation
+            close = cKDTree(p).query_pairs(self.separation, output_type="ndarray")
+            close = close[np.lexsort((close[:, 1], close[:, 0]))]  # (a fixed order)
+            d = np.hypot(*(p[close[:, 0]] - p[close[:, 1]]).T)
             paired: set[int] = set()
-            for n in np.flatnonzero(near)[np.argsort(d[a, b][near], kind="stable")]:
-                if a[n] in paired or b[n] in paired:
+            for a, b in close[np.argsort(d, kind="stable")].tolist():
+                if a in paired or b in paired:
                     continue
-                paired.update((int(a[n]), int(b[n])))
-                self._new([int(ids[free[a[n]]]), int(ids[free[b[n]]])], time)
+                paired.update((a, b))
+                self._new([int(ids[free[a]]), int(ids[free[b]])], time)
             free = [k for n, k in enumerate(free) if n not in paired]
         for k in free:
             self._new([int(ids[k])], time)

@@ -10,7 +10,11 @@
         tracks.ids, tracks.positions, tracks.velocities, tracks.existence, tracks.occluded
 
 Objects are discs of `radius`; a reported object is a confirmed Bernoulli with existence above
-`report_existence` and confidence at least `report_min_confidence` (default 0: off).
+`report_existence` and confidence at least `report_min_confidence` (default 0: off), whose
+centre lies in the sensor's field of view (the beams' span and range; a disc whose centre
+leaves it takes the filter's exit_survival, and the filter's square goes with the sensor).
+With body "legs" (a laser at leg height) the discs are legs, and the reported objects are the
+people `tracker.people.LegPairing` makes of them.
 `confidence` is existence times the probability that the true centre lies within one radius
 of the reported one (the centre's Gaussian taken as round, with variance sx sy:
 1 - exp(-a^2 / (2 sx sy))).
@@ -108,6 +112,7 @@ class ScanTracker:
                         if c.body == "legs" else None)
         self.scene = StaticScene(c.max_range) if c.static_scene else None
         self._last_time: float | None = None
+        self._reported: tuple[int, ScanTracks] | None = None
         self.segments = None
 
     def update(self, ranges: npt.ArrayLike, angles: npt.ArrayLike, timestamp: float,
@@ -155,7 +160,15 @@ class ScanTracker:
     def tracks(self) -> ScanTracks:
         """The objects reported now: the filter's discs, or with body "legs" the people its
         legs make (`tracker.people`; a person's confidence is its surest leg's, its centre
-        within half a stride, `leg_separation` / 2, of the reported one)."""
+        within half a stride, `leg_separation` / 2, of the reported one). The people are
+        paired once a scan, so asking again before the next scan gives the same answer."""
+        if self._reported is not None and self._reported[0] == self.filter.steps:
+            return self._reported[1]
+        out = self._tracks()
+        self._reported = (self.filter.steps, out)
+        return out
+
+    def _tracks(self) -> ScanTracks:
         f, c = self.filter, self.config
         r, means, sd = f.object_moments()
         shown = np.flatnonzero(f.confirmed() & (r > c.report_existence))
