@@ -83,6 +83,22 @@ def kitti_root() -> Path:
                  + " (../shared/data/kitti of the checkout, or kitti/ beside OCCTRACK_DATA)")
 
 
+@pytest.fixture(scope="session")
+def laser_recording() -> Path:
+    """The leg-tracker benchmark's recording folder (person_following_outdoor_1/: the bag,
+    scans.csv, the annotation): beside the checkout (../shared/data/laser), else beside the
+    MOT17 folder OCCTRACK_DATA names; skip, or fail in CI, without it."""
+    tried = [CHECKOUT.parent / "shared" / "data" / "laser"]
+    if os.environ.get("OCCTRACK_DATA"):
+        tried.append(Path(os.environ["OCCTRACK_DATA"]).parent / "laser")
+    for root in tried:
+        if (root / "person_following_outdoor_1").is_dir():
+            return root / "person_following_outdoor_1"
+    data_missing("the leg-tracker recording not found: no person_following_outdoor_1/ in "
+                 + " or ".join(str(root) for root in tried)
+                 + " (../shared/data/laser of the checkout, or laser/ beside OCCTRACK_DATA)")
+
+
 def headless_chromium(tmp_path, *args: str):
     """Debian's chromium run headless on `args` with a fresh profile in `tmp_path` (the
     report page's test and the docs site's); skips, saying how to get it, where it is absent."""

@@ -12,14 +12,11 @@ import math
 import numpy as np
 import pytest
 
-from conftest import CHECKOUT, data_missing
 from occtrack.cli import main
 from occtrack.errors import OcctrackError
 from occtrack.io.scans import read_people, read_tracks, write_tracks
 from occtrack.metrics.leg_benchmark import LegScores, score, summary, table
 
-LASER = CHECKOUT.parent / "shared" / "data" / "laser"
-RECORDING = LASER / "person_following_outdoor_1" / "ground_truth_people_tracks.csv"
 TRACKS_HEADER = "time,id,x,y,vx,vy,existence,confidence,occluded"
 
 
@@ -482,19 +479,18 @@ def test_eval_scans_help_names_its_options(capsys):
 
 # -- the real recording --------------------------------------------------------------------------
 
-def test_the_recordings_ground_truth_scored_against_itself_is_perfect(tmp_path, capsys):
+def test_the_recordings_ground_truth_scored_against_itself_is_perfect(laser_recording,
+                                                                      tmp_path, capsys):
     """Each annotated position as a track 1 us earlier: each lands on its own "scan"."""
-    if not RECORDING.is_file():
-        data_missing(f"the leg-tracker benchmark recording is not in {LASER} (../shared/data/"
-                     f"laser of the checkout)")
-    people = read_people(RECORDING)
+    recording = laser_recording / "ground_truth_people_tracks.csv"
+    people = read_people(recording)
     assert len(people) == 6179
     tracks = tmp_path / "tracks.csv"
     tracks.write_text(f"{TRACKS_HEADER}\n" + "".join(
         f"{t - 1e-6:.6f},{i},{x:.6f},{y:.6f},0,0,1,1,0\n"
         for t, i, (x, y) in zip(people.time, people.id, people.position, strict=True)))
     out = tmp_path / "scores.json"
-    assert main(["eval-scans", str(RECORDING), str(tracks), "--json", str(out), "--quiet"]) == 0
+    assert main(["eval-scans", str(recording), str(tracks), "--json", str(out), "--quiet"]) == 0
     capsys.readouterr()
     report = json.loads(out.read_text())
     assert (report["valid"], report["id_switches"], report["misses"]) == (6179, 0, 0)

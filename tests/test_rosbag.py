@@ -5,14 +5,12 @@ here with rosbags' own writers, and on the leg-tracker benchmark's recording whe
 from __future__ import annotations
 
 import math
-import os
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import CHECKOUT, data_missing
 from occtrack.cli import main
 from occtrack.errors import OcctrackError
 from occtrack.io.rosbag import read_bag_scans
@@ -372,19 +370,8 @@ def test_bag_options_need_a_bag(scene_bag, tmp_path, capsys):
 
 # -- the benchmark's recording --------------------------------------------------------------------
 
-def laser_root() -> Path:
-    tried = [CHECKOUT.parent / "shared" / "data" / "laser"]
-    if os.environ.get("OCCTRACK_DATA"):
-        tried.append(Path(os.environ["OCCTRACK_DATA"]).parent / "laser")
-    for root in tried:
-        if (root / "person_following_outdoor_1").is_dir():
-            return root / "person_following_outdoor_1"
-    data_missing("the leg-tracker recording not found: no person_following_outdoor_1/ in "
-                 + " or ".join(str(root) for root in tried))
-
-
-def test_the_leg_tracker_recording():
-    folder = laser_root()
+def test_the_leg_tracker_recording(laser_recording):
+    folder = laser_recording
     scans, poses, info = read_bag_scans(folder / "person_following_outdoor_1.bag")
     assert poses is None and len(scans) == info.scans == 7170 and info.beams == 245
     assert info.topic == "/scan_base2" and info.frame_id == "base_laser_link"
