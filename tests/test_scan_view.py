@@ -216,3 +216,38 @@ def test_a_lone_leg_is_not_a_person_until_a_second_joins_it():
                            np.ones(1), np.ones(1))
     assert again.ids.tolist() == [1]
     np.testing.assert_allclose(again.positions[0], [2.05, 0.0])
+
+
+def test_a_tentative_leg_keeps_or_refinds_a_person_but_never_starts_one():
+    """A leg track not yet confirmed (a leg whose track broke and began again) may keep its
+    person or take up a person who lost both legs; it never pairs with another leg into
+    somebody new, never makes a lone leg a pair, and a person held only by such legs for
+    longer than `hold` is no longer reported."""
+    pairing = LegPairing(separation=0.8, gate=0.5, hold=1.0, pairs_only=True)
+
+    def step(t, ids, pos, tentative):
+        pos = np.asarray(pos, float).reshape(-1, 2)
+        n = len(ids)
+        return pairing.update(t, np.array(ids, np.int64), pos, np.zeros((n, 2)), np.ones(n),
+                              np.ones(n), None, np.array(tentative, bool))
+
+    person = step(0.0, [1, 2], [[2.0, 0.1], [2.0, -0.1]], [False, False]).ids.tolist()
+    assert person == [1]
+    # both legs' tracks break: new tentative tracks where they were keep the person
+    people = step(0.1, [3, 4], [[2.0, 0.12], [2.0, -0.1]], [True, True])
+    assert people.ids.tolist() == person
+    # two tentative legs far away are nobody; a confirmed lone leg with a tentative one is
+    # no pair
+    people = step(0.2, [3, 4, 5, 6, 7, 8],
+                  [[2.0, 0.12], [2.0, -0.1], [4.0, 1.0], [4.0, 1.2], [3.0, -1.0],
+                   [3.0, -1.2]], [True, True, True, True, False, True])
+    assert people.ids.tolist() == person
+    assert {5, 6} not in [set(legs) for legs in pairing.members.values()]
+    # held by tentative legs alone for longer than hold: not reported, though kept
+    for t in (0.6, 1.0, 1.15):
+        people = step(t, [3, 4], [[2.0, 0.12], [2.0, -0.1]], [True, True])
+    assert people.ids.tolist() == []
+    assert (3, 4) in [tuple(sorted(v)) for v in pairing.members.values()]
+    # a confirmed leg again: reported again under the same id
+    people = step(1.2, [3, 4], [[2.0, 0.12], [2.0, -0.1]], [False, True])
+    assert people.ids.tolist() == person

@@ -20,8 +20,13 @@ Leigh et al., ICRA 2015):
 5. People closer than half a stride (`separation` / 2) are one person, the elder, who takes
    the younger's legs (a leg the filter tracks twice, a person's legs first seen apart).
 
-Reported: every person with a leg that has once had two (`pairs_only`: a lone leg-sized
-segment, a post, a bush, is not somebody until a second leg joins it); position the midpoint
+Legs not yet confirmed by the filter (tentative: a leg whose track broke on a scan that saw
+it in pieces and began again) take part in rules 1 and 2 only: they keep or re-find a person,
+never start one, and never count towards a pair.
+
+Reported: every person with a leg that has once had two confirmed ones (`pairs_only`: a lone
+leg-sized segment, a post, a bush, is not somebody until a second leg joins it) and has held
+a confirmed leg within the last `hold` seconds; position the midpoint
 of its two legs furthest apart (a leg tracked twice does not pull it), velocity the mean of its
 legs', and existence and confidence those of its likeliest leg (the probability that
 someone is there is at least that of its surest leg; the two legs of one person are not
@@ -74,6 +79,7 @@ class _Person:
     velocity: np.ndarray
     seen: float  # time its last leg was tracked
     paired: bool = False  # ever seen on two legs
+    sure: float = -math.inf  # time it last held a confirmed leg
 
 
 def _outer(legs: np.ndarray) -> list[int]:
@@ -124,10 +130,14 @@ class LegPairing:
 
     def update(self, time: float, ids: np.ndarray, positions: np.ndarray,
                velocities: np.ndarray, existence: np.ndarray, confidence: np.ndarray,
-               occluded: np.ndarray | None = None) -> People:
+               occluded: np.ndarray | None = None,
+               tentative: np.ndarray | None = None) -> People:
         """One scan's leg tracks (ids (L,), positions and velocities (L, 2), existence and
-        confidence (L,), occluded (L,)) in; the people out."""
+        confidence (L,), occluded (L,), tentative (L,): not yet confirmed, such a leg may keep
+        or join a person but never starts one) in; the people out."""
         ids = np.asarray(ids, dtype=np.int64)
+        tentative = (np.zeros(len(ids), bool) if tentative is None
+                     else np.asarray(tentative, bool).reshape(-1))
         positions = np.asarray(positions, dtype=float).reshape(-1, 2)
         velocities = np.asarray(velocities, dtype=float).reshape(-1, 2)
         row = {int(i): k for k, i in enumerate(ids)}
@@ -163,7 +173,8 @@ class LegPairing:
                 self._people[wanting[r]].legs.append(int(ids[free[c]]))
             taken = {leg for person in self._people.values() for leg in person.legs}
             free = [k for k in free if int(ids[k]) not in taken]
-        # 3. the rest pair with each other, or stand alone
+        # 3. the rest pair with each other, or stand alone (a tentative leg is nobody yet)
+        free = [k for k in free if not tentative[k]]
         if len(free) > 1:  # (the pairs within a stride, from a k-d tree: no all-pairs table)
             p = positions[free]
             close = cKDTree(p).query_pairs(self.separation, output_type="ndarray")
@@ -204,8 +215,10 @@ class LegPairing:
             rows = [row[leg] for leg in person.legs]
             person.velocity = velocities[rows].mean(axis=0)
             person.seen = time
-            person.paired |= len(rows) > 1
-            if person.paired or not self.pairs_only:
+            person.paired |= int(np.count_nonzero(~tentative[rows])) > 1
+            if not tentative[rows].all():
+                person.sure = time
+            if (person.paired or not self.pairs_only) and time - person.sure <= self.hold:
                 out.append((key, rows))
         return self._report(out, positions, velocities, np.asarray(existence, float),
                             np.asarray(confidence, float),

@@ -171,7 +171,11 @@ class ScanTracker:
     def _tracks(self) -> ScanTracks:
         f, c = self.filter, self.config
         r, means, sd = f.object_moments()
-        shown = np.flatnonzero(f.confirmed() & (r > c.report_existence))
+        confirmed = f.confirmed()
+        # with legs, a leg not yet confirmed may keep its person (a leg track that broke and
+        # started again), never start one
+        shown = np.flatnonzero((confirmed | (self.pairing is not None))
+                               & (r > c.report_existence))
         shown = shown[np.argsort(f.slot_serial[shown], kind="stable")]
         s = sd[shown] / self.measurement.unit
         a = c.radius if self.pairing is None else c.leg_separation / 2
@@ -188,7 +192,7 @@ class ScanTracker:
             return ScanTracks(f.slot_serial[shown].copy(), pos, vel, r[shown].copy(),
                               confidence, hidden, took.copy())
         people = self.pairing.update(self._last_time or 0.0, f.slot_serial[shown], pos, vel,
-                                     r[shown], confidence, hidden)
+                                     r[shown], confidence, hidden, ~confirmed[shown])
         people = people.select(self.measurement.sees(people.positions))
         segment = np.full(len(people), -1, dtype=np.int64)
         leg_took = dict(zip(f.slot_serial[shown].tolist(), took.tolist(), strict=True))
