@@ -251,3 +251,35 @@ def test_a_tentative_leg_keeps_or_refinds_a_person_but_never_starts_one():
     # a confirmed leg again: reported again under the same id
     people = step(1.2, [3, 4], [[2.0, 0.12], [2.0, -0.1]], [False, True])
     assert people.ids.tolist() == person
+
+
+def test_one_segment_two_legs_wide_is_a_pair():
+    """A person standing with legs together is one segment wider than one leg can look: a
+    confirmed leg on such a segment makes a person; a tentative one does not."""
+    pairing = LegPairing(separation=0.8, pairs_only=True)
+
+    def step(t, wide, tentative):
+        return pairing.update(t, np.array([1]), np.array([[1.2, 0.2]]), np.zeros((1, 2)),
+                              np.ones(1), np.ones(1), None, np.array([tentative]),
+                              np.array([wide]))
+
+    assert len(step(0.0, False, False)) == 0
+    assert len(step(0.1, True, True)) == 0
+    assert step(0.2, True, False).ids.tolist() == [1]
+    assert step(0.3, False, False).ids.tolist() == [1]  # once a pair, on one leg too
+
+
+def test_the_tracker_calls_a_segment_two_legs_wide_by_its_first_and_last_return():
+    tracker = ScanTracker(ScanTrackerConfig(max_range=5.0, body="legs", leg_radius=0.1),
+                          beams=245, rate=RATE)
+    angles = wedge()
+    step = angles[1] - angles[0]
+    z = np.full(len(angles), np.inf)
+    # at 2 m: 0.15 m (one leg), 0.3 m (two together), 0.6 m (neither), 5 beams' worth each
+    for first, width in ((20, 0.15), (100, 0.3), (180, 0.6)):
+        n = int(round(width / (2.0 * step))) + 1
+        z[first:first + n] = 2.0
+    tracker.update(z, angles, 0.0)
+    segs = np.arange(len(tracker.segments))
+    wide = tracker._two_legs_wide(np.r_[segs, -1])
+    assert wide.tolist() == [False, True, False, False]

@@ -36,7 +36,7 @@ SCAN_RANGES = {
     "p_d": "[0, 1]", "range_noise": "(0, 100]", "clutter_per_scan": "(0, 100000]",
     "max_range": "(0, 100000]", "radius": "(0, 100]", "leg_radius": "(0, 100]",
     "leg_separation": "[0, 100]", "leg_gate": "[0, 100]", "leg_hold": "[0, 100000]",
-    "segment_jump": "(0, 1000]",
+    "segment_jump": "(0, 1000]", "clutter_memory": "(0, 1000000]",
     "segment_gap": "[0, 1000]", "min_birth_beams": "[1, 100000]",
     "detectability": "[0, 1]", "occludability": "[0, 1]", "birth_occludability": "[0, 1]",
     "position_noise": "[0, 1000]", "velocity_noise": "[0, 1000]",
@@ -68,6 +68,12 @@ class ScanTrackerConfig:
     `static_scene`: keep an occupancy grid of what stands still (`models.static_scene`) and
     give a segment's birth the probability that it is not part of it, so walls and posts do
     not become people (it needs the sensor's pose when the sensor moves).
+
+    `clutter_map`: learn the clutter's density by range from the sensor as the scans come
+    (`models.clutter_map`: returns no confirmed track took, over the beam that reached them,
+    faded over `clutter_memory` s), so that a segment where spurious returns are common (the
+    ground a tilted laser strikes, the flicker at the end of its range) is weak evidence of a
+    person; off, clutter is `clutter_per_scan` spread evenly over the range.
 
     Segments: a scan's returns are cut into runs of neighbouring beams whose ranges differ by
     less than `segment_jump` m (plus 4 range_noise), skipping at most `segment_gap` beams
@@ -113,6 +119,8 @@ class ScanTrackerConfig:
     leg_hold: float = 1.0
     leg_pairs_only: bool = True
     static_scene: bool = False
+    clutter_map: bool = True
+    clutter_memory: float = 10.0
     segment_jump: float = 0.3
     segment_gap: int = 1
     min_birth_beams: int = 2

@@ -104,6 +104,7 @@ class Segments:
     segment_of_beam: np.ndarray
     offset: np.ndarray = field(default_factory=lambda: np.zeros(0))
     static: np.ndarray | None = None  # (M,) the probability each is static scene, if known
+    clutter_log: np.ndarray | None = None  # (M,) log of its clutter against the uniform model
 
     def points(self) -> tuple[np.ndarray, np.ndarray]:
         """The returns of the segments in the world (P, 2) and the segment of each (P,)."""
@@ -394,8 +395,12 @@ class ScanMeasurement:
 
     def clutter_density(self, z: Segments, observed: np.ndarray,
                         scores: np.ndarray) -> np.ndarray:
-        """Clutter on every beam is Lambda = 1; shifted as the segment's log-likelihoods."""
-        return np.exp(np.maximum(z.offset, -700.0))
+        """Clutter on every beam is Lambda = 1 (times the clutter map's ratio, when the
+        segments carry one: `models.clutter_map`); shifted as the segment's log-likelihoods."""
+        log = z.offset if len(z.offset) == len(z) else np.zeros(len(z))
+        if z.clutter_log is not None:
+            log = log + z.clutter_log
+        return np.exp(np.clip(log, -700.0, 700.0))
 
     def update_rows(self, means: np.ndarray, covs: np.ndarray, rows: np.ndarray, z: Segments,
                     observed: np.ndarray, measurement: np.ndarray) -> None:

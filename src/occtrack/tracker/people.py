@@ -24,8 +24,10 @@ Legs not yet confirmed by the filter (tentative: a leg whose track broke on a sc
 it in pieces and began again) take part in rules 1 and 2 only: they keep or re-find a person,
 never start one, and never count towards a pair.
 
-Reported: every person with a leg that has once had two confirmed ones (`pairs_only`: a lone
-leg-sized segment, a post, a bush, is not somebody until a second leg joins it) and has held
+Reported: every person with a leg that has once had two confirmed ones, or one confirmed
+whose segment was wider than a leg can look (two legs side by side: a leg shows at most its
+diameter, `2 leg_radius`, to the scanner; up to twice that) (`pairs_only`: a lone leg-sized
+segment, a post, a bush, is not somebody until a second leg joins it) and has held
 a confirmed leg within the last `hold` seconds; position the midpoint
 of its two legs furthest apart (a leg tracked twice does not pull it), velocity the mean of its
 legs', and existence and confidence those of its likeliest leg (the probability that
@@ -131,13 +133,16 @@ class LegPairing:
     def update(self, time: float, ids: np.ndarray, positions: np.ndarray,
                velocities: np.ndarray, existence: np.ndarray, confidence: np.ndarray,
                occluded: np.ndarray | None = None,
-               tentative: np.ndarray | None = None) -> People:
+               tentative: np.ndarray | None = None, wide: np.ndarray | None = None) -> People:
         """One scan's leg tracks (ids (L,), positions and velocities (L, 2), existence and
         confidence (L,), occluded (L,), tentative (L,): not yet confirmed, such a leg may keep
-        or join a person but never starts one) in; the people out."""
+        or join a person but never starts one; wide (L,): its segment this scan was wider than
+        one leg can look, two legs together) in; the people out."""
         ids = np.asarray(ids, dtype=np.int64)
         tentative = (np.zeros(len(ids), bool) if tentative is None
                      else np.asarray(tentative, bool).reshape(-1))
+        wide = (np.zeros(len(ids), bool) if wide is None
+                else np.asarray(wide, bool).reshape(-1))
         positions = np.asarray(positions, dtype=float).reshape(-1, 2)
         velocities = np.asarray(velocities, dtype=float).reshape(-1, 2)
         row = {int(i): k for k, i in enumerate(ids)}
@@ -215,7 +220,8 @@ class LegPairing:
             rows = [row[leg] for leg in person.legs]
             person.velocity = velocities[rows].mean(axis=0)
             person.seen = time
-            person.paired |= int(np.count_nonzero(~tentative[rows])) > 1
+            sure = ~tentative[rows]
+            person.paired |= int(np.count_nonzero(sure)) > 1 or bool((sure & wide[rows]).any())
             if not tentative[rows].all():
                 person.sure = time
             if (person.paired or not self.pairs_only) and time - person.sure <= self.hold:
@@ -228,6 +234,12 @@ class LegPairing:
     def members(self) -> dict[int, tuple[int, ...]]:
         """Every person kept (reported or held) and the leg track ids it holds now."""
         return {key: tuple(p.legs) for key, p in sorted(self._people.items())}
+
+    def kept_positions(self) -> np.ndarray:
+        """Where each person kept (reported or held) was last seen (n, 2), m."""
+        if not self._people:
+            return np.zeros((0, 2))
+        return np.array([p.position for _, p in sorted(self._people.items())], float)
 
     def _new(self, legs: list[int], time: float) -> None:
         self._people[self._next] = _Person(legs, np.zeros(2), np.zeros(2), time)

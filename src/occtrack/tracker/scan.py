@@ -29,10 +29,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from scipy.spatial import cKDTree
 
 from occtrack.config.scan import CENTIMETRES, ScanTrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.models.beam import BeamModel
+from occtrack.models.clutter_map import ClutterMap
 from occtrack.models.point import PointMeasurement
 from occtrack.models.scan_hand_made import HandMadeScanMeasurement
 from occtrack.models.scan_segments import ScanBirths, ScanMeasurement
@@ -111,6 +113,8 @@ class ScanTracker:
         self.pairing = (LegPairing(c.leg_separation, c.leg_gate, c.leg_hold, c.leg_pairs_only)
                         if c.body == "legs" else None)
         self.scene = StaticScene(c.max_range) if c.static_scene else None
+        self.clutter = (ClutterMap(self.beam_model.kappa, c.max_range, memory=c.clutter_memory)
+                        if c.clutter_map and c.likelihood != "cluster" else None)
         self._last_time: float | None = None
         self._reported: tuple[int, ScanTracks] | None = None
         self.segments = None
@@ -152,10 +156,56 @@ class ScanTracker:
         if self.scene is not None:  # what stood there before this scan, then this scan
             z.static = self.scene.static_probability(*z.points(), len(z))
             self.scene.add_scan(where, angles, ranges)
+        returned = np.isfinite(ranges) & (ranges < self.config.max_range)
+        if self.clutter is not None:  # each segment's returns against the clutter there
+            per_beam = np.zeros(len(ranges))
+            per_beam[returned] = self.clutter.log_ratio(ranges[returned])
+            z.clutter_log = np.add.reduceat(per_beam[z.beam], z.start[:-1]) if len(z) else (
+                np.zeros(0))
         self.segments = z
         camera = (np.ones(2), shift) if shift.any() else None
         self.filter.step(z, np.ones(len(z)), camera=camera, dt=dt)
+        if self.clutter is not None:  # returns on no likely object's disc were clutter
+            self.clutter.learn(ranges, returned & ~self._on_objects(angles, ranges, where), dt)
         return self.tracks()
+
+    def _two_legs_wide(self, segment: np.ndarray) -> np.ndarray:
+        """Per segment index (-1: none), whether that segment of this scan is wider than one
+        leg can look and at most two legs side by side: (2, 4] leg radii from its first
+        return to its last."""
+        z, a = self.segments, self.config.leg_radius
+        out = np.zeros(len(segment), bool)
+        if z is None or len(z) == 0 or not (segment >= 0).any():
+            return out
+        points, seg = z.points()
+        first = np.searchsorted(seg, np.arange(len(z)), side="left")
+        last = np.searchsorted(seg, np.arange(len(z)), side="right") - 1
+        has = last >= first
+        width = np.zeros(len(z))
+        width[has] = np.hypot(*(points[last[has]] - points[first[has]]).T)
+        w = width[np.maximum(segment, 0)]
+        return (segment >= 0) & (w > 2 * a) & (w <= 4 * a)
+
+    def _on_objects(self, angles: np.ndarray, ranges: np.ndarray,
+                    origin: np.ndarray) -> np.ndarray:
+        """Which returns (B,) are an object's, not clutter: those of the segments a likely
+        object (existence above report_existence) took and, with legs, those within half a
+        stride of a person the pairing keeps (a leg this scan cut into pieces, a person whose
+        leg tracks broke and begin again)."""
+        f, z = self.filter, self.segments
+        r = f.object_moments()[0]
+        took = f.slot_detection[(r > self.config.report_existence) & (f.slot_detection >= 0)]
+        on = np.zeros(len(ranges), bool)
+        on[z.beam[np.isin(np.repeat(np.arange(len(z)), np.diff(z.start)), took)]] = True
+        people = None if self.pairing is None else self.pairing.kept_positions()
+        if people is not None and len(people):
+            fin = np.flatnonzero(np.isfinite(ranges))
+            points = origin + ranges[fin, None] * np.c_[np.cos(angles[fin]),
+                                                         np.sin(angles[fin])]
+            near = cKDTree(people).query(points,
+                                         distance_upper_bound=self.config.leg_separation / 2)
+            on[fin] |= np.isfinite(near[0])
+        return on
 
     def tracks(self) -> ScanTracks:
         """The objects reported now: the filter's discs, or with body "legs" the people its
@@ -192,7 +242,8 @@ class ScanTracker:
             return ScanTracks(f.slot_serial[shown].copy(), pos, vel, r[shown].copy(),
                               confidence, hidden, took.copy())
         people = self.pairing.update(self._last_time or 0.0, f.slot_serial[shown], pos, vel,
-                                     r[shown], confidence, hidden, ~confirmed[shown])
+                                     r[shown], confidence, hidden, ~confirmed[shown],
+                                     self._two_legs_wide(took))
         people = people.select(self.measurement.sees(people.positions))
         segment = np.full(len(people), -1, dtype=np.int64)
         leg_took = dict(zip(f.slot_serial[shown].tolist(), took.tolist(), strict=True))
