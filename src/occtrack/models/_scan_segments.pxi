@@ -1,5 +1,6 @@
 # The compiled kernels of scan_segments.py: the segment fit statistics at a linearisation
-# point (`_linearise`) and the derived other-beam term (`_other_beams`).
+# point (`_linearise`), the derived other-beam term (`_other_beams`) and the hit beams'
+# Gaussian with the centre's posterior (`_gaussian_hits`).
 
 
 cdef inline double _scan_phi(double x) noexcept nogil:
@@ -154,3 +155,72 @@ def _other_beams(object centre, object cov, object j, object origin, object angl
                     total += log(1.0 - reach * (1.0 - m))
             out[p] = total
     return out_
+
+
+def _gaussian_hits(object centre, object cov, object fit, object A, object Hr, object rr,
+                   object n, double sigma2):
+    """`scan_segments._gaussian_hits`, compiled: per pair, log N of the hit beams from the
+    fit statistics (the Woodbury forms, M2 = sigma^2 I + P A inverted in closed form) and the
+    centre's posterior mean and covariance (symmetrised, its variances at least 0)."""
+    cdef Py_ssize_t P = dim(centre, 0)
+    cdef const f64* c = doubles(centre, 2, "centre")
+    cdef const f64* cv = doubles(cov, 3, "cov")
+    cdef const f64* f = doubles(fit, 2, "fit")
+    cdef const f64* a = doubles(A, 3, "A")
+    cdef const f64* h = doubles(Hr, 2, "Hr")
+    cdef const f64* r2 = doubles(rr, 1, "rr")
+    cdef const f64* nn = doubles(n, 1, "n")
+    if (dim(centre, 1) != 2 or dim(cov, 0) < P or dim(fit, 0) < P or dim(A, 0) < P
+            or dim(Hr, 0) < P or dim(rr, 0) < P or dim(n, 0) < P):
+        raise ValueError("centre, cov, fit, A, Hr, rr and n need a row a pair")
+    cdef cnp.ndarray out_ = new_doubles(1, P), post_ = new_doubles(2, P, 2)
+    cdef cnp.ndarray pcov_ = new_doubles(3, P, 2, 2)
+    cdef f64* out = <f64*>cnp.PyArray_DATA(out_)
+    cdef f64* post = <f64*>cnp.PyArray_DATA(post_)
+    cdef f64* pc = <f64*>cnp.PyArray_DATA(pcov_)
+    cdef Py_ssize_t p
+    cdef double d0, d1, ad0, ad1, E, b0, b1, m00, m01, m10, m11, det, i00, i01, i10, i11
+    cdef double pb0, pb1, w0, w1, quad, logdet, pa00, pa01, pa10, pa11, q00, q01, q10, q11
+    cdef double s01
+    cdef double log_2pi = log(2.0 * M_PI), log_s2 = log(sigma2)
+    with nogil:
+        for p in range(P):
+            d0, d1 = c[p * 2] - f[p * 2], c[p * 2 + 1] - f[p * 2 + 1]
+            ad0 = a[p * 4] * d0 + a[p * 4 + 1] * d1
+            ad1 = a[p * 4 + 2] * d0 + a[p * 4 + 3] * d1
+            E = r2[p] - 2.0 * (d0 * h[p * 2] + d1 * h[p * 2 + 1]) + (d0 * ad0 + d1 * ad1)
+            b0, b1 = h[p * 2] - ad0, h[p * 2 + 1] - ad1
+            # M2 = sigma^2 I + P A
+            m00 = sigma2 + (cv[p * 4] * a[p * 4] + cv[p * 4 + 1] * a[p * 4 + 2])
+            m01 = cv[p * 4] * a[p * 4 + 1] + cv[p * 4 + 1] * a[p * 4 + 3]
+            m10 = cv[p * 4 + 2] * a[p * 4] + cv[p * 4 + 3] * a[p * 4 + 2]
+            m11 = sigma2 + (cv[p * 4 + 2] * a[p * 4 + 1] + cv[p * 4 + 3] * a[p * 4 + 3])
+            det = m00 * m11 - m01 * m10
+            i00, i01, i10, i11 = m11 / det, -m01 / det, -m10 / det, m00 / det
+            pb0 = cv[p * 4] * b0 + cv[p * 4 + 1] * b1
+            pb1 = cv[p * 4 + 2] * b0 + cv[p * 4 + 3] * b1
+            w0 = i00 * pb0 + i01 * pb1
+            w1 = i10 * pb0 + i11 * pb1
+            quad = (E - (b0 * w0 + b1 * w1)) / sigma2
+            logdet = nn[p] * log_s2 + log(det / (sigma2 * sigma2))
+            out[p] = -0.5 * (quad + logdet + nn[p] * log_2pi)
+            post[p * 2], post[p * 2 + 1] = c[p * 2] + w0, c[p * 2 + 1] + w1
+            # P - M2^-1 (P A P)
+            pa00 = cv[p * 4] * a[p * 4] + cv[p * 4 + 1] * a[p * 4 + 2]
+            pa01 = cv[p * 4] * a[p * 4 + 1] + cv[p * 4 + 1] * a[p * 4 + 3]
+            pa10 = cv[p * 4 + 2] * a[p * 4] + cv[p * 4 + 3] * a[p * 4 + 2]
+            pa11 = cv[p * 4 + 2] * a[p * 4 + 1] + cv[p * 4 + 3] * a[p * 4 + 3]
+            q00 = pa00 * cv[p * 4] + pa01 * cv[p * 4 + 2]
+            q01 = pa00 * cv[p * 4 + 1] + pa01 * cv[p * 4 + 3]
+            q10 = pa10 * cv[p * 4] + pa11 * cv[p * 4 + 2]
+            q11 = pa10 * cv[p * 4 + 1] + pa11 * cv[p * 4 + 3]
+            pc[p * 4] = cv[p * 4] - (i00 * q00 + i01 * q10)
+            pc[p * 4 + 1] = cv[p * 4 + 1] - (i00 * q01 + i01 * q11)
+            pc[p * 4 + 2] = cv[p * 4 + 2] - (i10 * q00 + i11 * q10)
+            pc[p * 4 + 3] = cv[p * 4 + 3] - (i10 * q01 + i11 * q11)
+            s01 = 0.5 * (pc[p * 4 + 1] + pc[p * 4 + 2])
+            pc[p * 4 + 1], pc[p * 4 + 2] = s01, s01
+            pc[p * 4] = _scan_max(pc[p * 4], 0.0) if pc[p * 4] == pc[p * 4] else pc[p * 4]
+            pc[p * 4 + 3] = (_scan_max(pc[p * 4 + 3], 0.0) if pc[p * 4 + 3] == pc[p * 4 + 3]
+                             else pc[p * 4 + 3])
+    return out_, post_, pcov_

@@ -70,7 +70,12 @@ import numpy as np
 import numpy.typing as npt
 from scipy.special import ndtr
 
-from occtrack.models._models import _linearise, _other_beams
+# _gaussian_hits: log N(z_j; rho(c_j) + H (m - c_j), H P H' + sigma^2 I) per pair from the
+# segment's fit statistics (A = H'H, Hr = H'e, rr = e'e, n beams), the component's centre m
+# and covariance P (the Woodbury forms of the module docstring), and the centre's posterior
+# given the hit beams, m + w and P - (sigma^2 I + P A)^-1 P A P (compiled: numpy's per-pair
+# 2 x 2 algebra was a sixth of the time on a real robot's scans)
+from occtrack.models._models import _gaussian_hits, _linearise, _other_beams
 from occtrack.models.beam import BeamModel
 
 ITERATIONS = 3  # iterated EKF: linearisations a (component, segment) pair
@@ -426,31 +431,6 @@ class ScanMeasurement:
             means[rows, axis] += C * (g[:, axis] * self.unit)[:, None] / u2
             covs[rows, axis] -= (X[:, axis, axis] / u2)[:, None, None] * (
                 C[:, :, None] * C[:, None, :])
-
-
-def _gaussian_hits(centre, cov, fit, A, Hr, rr, n, sigma2):
-    """log N(z_j; rho(c_j) + H (m - c_j), H P H' + sigma^2 I) per pair, from the segment's
-    fit statistics (A = H'H, Hr = H'e, rr = e'e, n beams) and the component's centre m (K, 2)
-    and covariance P (K, 2, 2) (the Woodbury forms of the module docstring); and the centre's
-    posterior given the hit beams, mean m + w and covariance P - (sigma^2 I + P A)^-1 P A P."""
-    d = centre - fit
-    Ad = np.einsum("pij,pj->pi", A, d)
-    E = rr - 2.0 * np.sum(d * Hr, axis=1) + np.sum(d * Ad, axis=1)
-    b = Hr - Ad
-    M2 = sigma2 * np.eye(2) + cov @ A
-    # M2^-1 in closed form (2 x 2, sigma^2 I + P A: well conditioned), a third of the time
-    # numpy's batched solve and det took on a real robot's scans
-    det = M2[:, 0, 0] * M2[:, 1, 1] - M2[:, 0, 1] * M2[:, 1, 0]
-    inv = np.stack([np.stack([M2[:, 1, 1], -M2[:, 0, 1]], axis=-1),
-                    np.stack([-M2[:, 1, 0], M2[:, 0, 0]], axis=-1)], axis=1) / det[:, None, None]
-    w = np.einsum("pij,pj->pi", inv, np.einsum("pij,pj->pi", cov, b))
-    quad = (E - np.sum(b * w, axis=1)) / sigma2
-    logdet = n * np.log(sigma2) + np.log(det / sigma2**2)
-    post_cov = cov - inv @ (cov @ A @ cov)
-    post_cov = 0.5 * (post_cov + np.swapaxes(post_cov, 1, 2))
-    for a in range(2):
-        post_cov[:, a, a] = np.maximum(post_cov[:, a, a], 0.0)
-    return -0.5 * (quad + logdet + n * LOG_2PI), centre + w, post_cov
 
 
 def _fill_bridged(ranges: np.ndarray, of_beam: np.ndarray, beam: np.ndarray,
