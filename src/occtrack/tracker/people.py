@@ -11,9 +11,9 @@ Leigh et al., ICRA 2015):
 1. A person keeps each of its legs that is still tracked and lies within `separation` m of
    its first (legs that drift further apart part: the far one is free again).
 2. Free legs join people who lack a leg: a person with one leg takes the nearest free leg
-   within `separation` of it; a person with none, the nearest within `gate` m (plus the
-   distance its last velocity carries it) of where it was (least total distance, scipy's
-   Hungarian).
+   within `separation` of it; a person with none, the nearest within `gate` m of where it
+   was last seen (not carried on by its velocity: a leg's velocity, swing or stance, says
+   little of its person's) (least total distance, scipy's Hungarian).
 3. Free legs left over pair with each other, the closest pair within `separation` first;
    a leg with no partner is a person of one leg.
 4. A person with no leg for more than `hold` seconds is gone.
@@ -110,8 +110,8 @@ class LegPairing:
 
     Args:
         separation: the widest stride, m: two legs further apart are not one person's.
-        gate: how far, m, a person who lost both legs may be found again by a new leg (plus
-            its last velocity times the time since).
+        gate: how far, m, from where it was last seen a person who lost both legs may be
+            found again by a new leg.
         hold: seconds a person without a leg is kept for a new leg to take up.
         pairs_only: report a person only once it has been seen on two legs (a lone
             leg-sized segment, a post or a bush, is not somebody until a second leg joins).
@@ -168,10 +168,9 @@ class LegPairing:
                 person = self._people[key]
                 if person.legs:
                     anchor, reach = positions[row[person.legs[0]]], self.separation
-                else:
-                    gap = max(time - person.seen, 0.0)
-                    anchor = person.position + person.velocity * gap
-                    reach = self.gate
+                else:  # where it was last seen (a leg's velocity, swing or stance, says
+                    # little of the person's)
+                    anchor, reach = person.position, self.gate
                 d = np.hypot(*(positions[free] - anchor).T)
                 cost[r] = np.where(d <= reach, d, FAR)
             for r, c in _assign(cost):
