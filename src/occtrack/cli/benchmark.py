@@ -207,12 +207,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"occtrack benchmark: note: {note}", file=sys.stderr)
 
     text = benchmark.to_json(report)
-    if args.json == "-":
-        sys.stdout.write(text)
-    else:
-        if args.json is not None:
-            with atomic_write(args.json, args.force) as fh:
-                fh.write(text)
+    if args.json is not None:  # (atomic_write takes "-" for standard output)
+        with atomic_write(args.json, args.force) as fh:
+            fh.write(text)
+    if args.json != "-":
         print((benchmark_kitti if kitti else benchmark).format_report(report))
     if not args.quiet:
         frames = sum(entry["frames"] for entry in report["sequences"].values()) * len(trackers)

@@ -127,12 +127,10 @@ def run(args: argparse.Namespace) -> int:
                     f"misses")
     report = {"gt": str(args.gt), "tracks": str(args.tracks), **scores.as_dict()}
     text = json.dumps(report, indent=1, allow_nan=False) + "\n"
-    if args.json == "-":
-        sys.stdout.write(text)
-    else:
-        if args.json is not None:
-            with atomic_write(args.json, args.force) as fh:
-                fh.write(text)
+    if args.json is not None:  # (atomic_write takes "-" for standard output)
+        with atomic_write(args.json, args.force) as fh:
+            fh.write(text)
+    if args.json != "-":
         print(leg_benchmark.table(scores, name=str(args.tracks)))
     if not args.quiet:
         print(leg_benchmark.summary(scores), file=sys.stderr if args.json == "-" else sys.stdout)
