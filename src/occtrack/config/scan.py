@@ -70,8 +70,8 @@ class ScanTrackerConfig:
     not become people (it needs the sensor's pose when the sensor moves).
 
     `clutter_map`: learn the clutter's density by range from the sensor as the scans come
-    (`models.clutter_map`: returns no confirmed track took, over the beam that reached them,
-    faded over `clutter_memory` s), so that a segment where spurious returns are common (the
+    (`models.clutter_map`: the returns no likely object explains, over the beam that reached
+    them, faded over `clutter_memory` s), so that a segment where spurious returns are common (the
     ground a tilted laser strikes, the flicker at the end of its range) is weak evidence of a
     person; off, clutter is `clutter_per_scan` spread evenly over the range.
 

@@ -10,8 +10,10 @@ alive behind the followed person, seen again through the gap between their legs)
 track that lives for minutes.
 
 The map keeps the clutter intensity kappa(r) per range bin as a hazard along the beam: the
-returns in the bin that no confirmed track took, over the metres of beam that reached the bin
-without an earlier return (a beam that hit a leg at 1.8 m says nothing of clutter at 5 m),
+returns in the bin that no object explains (the tracker says which: `tracker.scan`, the
+segments likely objects took and, with legs, the returns near a person it keeps), over the
+metres of beam that reached the bin without an earlier return (a beam that hit a leg at
+1.8 m says nothing of clutter at 5 m),
 
     kappa(r) = (c_r + kappa_0 e_0 w) / (e_r + e_0 w),
 
@@ -76,7 +78,7 @@ class ClutterMap:
 
     def learn(self, ranges: np.ndarray, clutter: np.ndarray, dt: float) -> None:
         """Add one scan: every beam's range (inf: no return) and which of its returns are
-        clutter (no confirmed track took them), `dt` s after the last."""
+        clutter (no object explains them), `dt` s after the last."""
         fade = math.exp(-max(float(dt), 0.0) / self.memory)
         self.count *= fade
         self.exposure *= fade

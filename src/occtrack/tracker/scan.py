@@ -165,7 +165,7 @@ class ScanTracker:
         self.segments = z
         camera = (np.ones(2), shift) if shift.any() else None
         self.filter.step(z, np.ones(len(z)), camera=camera, dt=dt)
-        if self.clutter is not None:  # returns on no likely object's disc were clutter
+        if self.clutter is not None:  # the returns no likely object explains were clutter
             self.clutter.learn(ranges, returned & ~self._on_objects(angles, ranges, where), dt)
         return self.tracks()
 
