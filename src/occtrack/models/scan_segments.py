@@ -81,7 +81,6 @@ from occtrack.models.beam import BeamModel
 ITERATIONS = 3  # iterated EKF: linearisations a (component, segment) pair
 MAX_SLOPE = 5.0  # hit beams: |d rho / d c| across the beam at most this
 SPREAD = 6.0  # beams looked at: the disc's span widened by this many centre deviations
-LOG_2PI = float(np.log(2 * np.pi))
 RADIUS_VAR = 1e-6  # (filter units^2) a disc's radius is known; a small variance keeps P regular
 
 

@@ -195,8 +195,7 @@ class ScanTracker:
         f, z = self.filter, self.segments
         r = f.object_moments()[0]
         took = f.slot_detection[(r > self.config.report_existence) & (f.slot_detection >= 0)]
-        on = np.zeros(len(ranges), bool)
-        on[z.beam[np.isin(np.repeat(np.arange(len(z)), np.diff(z.start)), took)]] = True
+        on = np.isin(z.segment_of_beam, took)
         people = None if self.pairing is None else self.pairing.kept_positions()
         if people is not None and len(people):
             fin = np.flatnonzero(np.isfinite(ranges))
