@@ -190,8 +190,9 @@ class ScanTracker:
                     origin: np.ndarray) -> np.ndarray:
         """Which returns (B,) are an object's, not clutter: those of the segments a likely
         object (existence above report_existence) took and, with legs, those within half a
-        stride of a person the pairing keeps (a leg this scan cut into pieces, a person whose
-        leg tracks broke and begin again)."""
+        stride and a leg's radius of a person the pairing keeps (where a leg of theirs can
+        return from: a leg this scan cut into pieces, a person whose leg tracks broke and
+        begin again)."""
         f, z = self.filter, self.segments
         r = f.object_moments()[0]
         took = f.slot_detection[(r > self.config.report_existence) & (f.slot_detection >= 0)]
@@ -201,8 +202,8 @@ class ScanTracker:
             fin = np.flatnonzero(np.isfinite(ranges))
             points = origin + ranges[fin, None] * np.c_[np.cos(angles[fin]),
                                                          np.sin(angles[fin])]
-            near = cKDTree(people).query(points,
-                                         distance_upper_bound=self.config.leg_separation / 2)
+            reach = self.config.leg_separation / 2 + self.config.leg_radius
+            near = cKDTree(people).query(points, distance_upper_bound=reach)
             on[fin] |= np.isfinite(near[0])
         return on
 
