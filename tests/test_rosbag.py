@@ -165,9 +165,14 @@ def test_topic_choice_and_its_errors(tmp_path):
     messages = three_scans()
     messages.scan(T0 + 5, [7.0, 8.0], topic="/front")
     bag = messages.write(tmp_path / "two.bag")
-    with pytest.raises(OcctrackError, match=r"two.bag: 2 LaserScan topics \(/front, /scan\); "
-                                            r"pass --topic to choose one"):
-        read_bag_scans(bag)
+    scans, _, info = read_bag_scans(bag)  # among several, ROS's conventional /scan
+    assert (info.topic, len(scans)) == ("/scan", 3)
+    other = Messages()
+    other.scan(T0, [7.0, 8.0], topic="/front")
+    other.scan(T0 + 1, [9.0], topic="/rear")
+    with pytest.raises(OcctrackError, match=r"two_others.bag: 2 LaserScan topics \(/front, "
+                                            r"/rear\); pass --topic to choose one"):
+        read_bag_scans(other.write(tmp_path / "two_others.bag"))
     scans, _, info = read_bag_scans(bag, topic="/front")
     assert scans.range.tolist() == [7.0, 8.0] and info.laser_topics == ("/front", "/scan")
     assert len(read_bag_scans(bag, topic="/scan")[0]) == 3
@@ -340,6 +345,22 @@ def test_the_bag_range_max_is_the_tracker_max_range_unless_the_config_sets_it(tm
     assert main(["track-scans", str(bag), "-o", str(out), "--quiet", "--force",
                  "--config", str(config)]) == 0
     assert "6 returns at or beyond max_range (3 m)" in capsys.readouterr().err
+
+
+def test_among_several_laser_topics_the_command_reads_scan_and_says_so(tmp_path, capsys):
+    messages = Messages()
+    for k in range(3):
+        messages.scan(T0 + k * 10**8, [1.0, 5.0, 9.0])
+        messages.scan(T0 + k * 10**8 + 5, [2.0, 2.0], topic="/rear")
+    bag = messages.write(tmp_path / "rec.bag")
+    out = tmp_path / "tracks.csv"
+    assert main(["track-scans", str(bag), "-o", str(out), "--quiet"]) == 0
+    assert capsys.readouterr().err == (
+        f"occtrack track-scans: note: {bag} has 2 LaserScan topics (/rear, /scan); reading "
+        f"/scan, ROS's conventional laser topic (--topic chooses another)\n")
+    assert main(["track-scans", str(bag), "-o", str(out), "--quiet", "--force",
+                 "--topic", "/rear"]) == 0
+    assert capsys.readouterr().err == ""
 
 
 def one_error(capsys) -> str:

@@ -37,7 +37,8 @@ from the median time between scans). A malformed row stops the run with the file
 
 SCANS may also be a ROS bag (needs the ros extra: pip install "occtrack[ros]"): a ROS 1 .bag
 file, a ROS 2 bag folder (holding metadata.yaml), or its .db3 or .mcap file. Its
-sensor_msgs/LaserScan messages are the scans (--topic chooses when it has several): beam k at
+sensor_msgs/LaserScan messages are the scans (among several, /scan, ROS's conventional
+name for a robot's laser; --topic chooses another): beam k at
 angle_min + k angle_increment (reversed when angle_increment < 0), ranges as sent, inf for no
 return. A reading REP 117 calls invalid (nan, -inf, or outside [range_min, range_max]) says
 nothing about its beam and is left out of its scan, with a warning giving the count. A scan's
@@ -96,7 +97,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "heading 0")
     parser.add_argument("--topic", metavar="TOPIC",
                         help="with a bag: its sensor_msgs/LaserScan topic (default: its only "
-                             "one)")
+                             "one, or /scan among several)")
     parser.add_argument("--fixed-frame", metavar="FRAME",
                         help="with a bag: the world frame; the sensor's pose a scan comes from "
                              "the bag's /tf, /tf_static or odometry (default: tracks in the "
@@ -234,6 +235,10 @@ def run(args: argparse.Namespace) -> int:
     scans, poses, info = read_input(args)
     config = build_config(args, recording_defaults(scans, info))
     if info is not None:
+        if args.topic is None and len(info.laser_topics) > 1:
+            print(f"occtrack track-scans: note: {args.scans} has {len(info.laser_topics)} "
+                  f"LaserScan topics ({', '.join(info.laser_topics)}); reading {info.topic}, "
+                  f"ROS's conventional laser topic (--topic chooses another)", file=sys.stderr)
         if info.invalid:
             print(f"occtrack track-scans: warning: {args.scans}: {info.invalid} of "
                   f"{info.scans * info.beams} readings of {info.topic} are invalid (nan, -inf "

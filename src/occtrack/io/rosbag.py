@@ -6,6 +6,10 @@ bag's `.db3` / `.mcap` files (the folder around it is read when it holds metadat
 `rosbags` package reads them all, pure Python, with the message definitions the bag carries
 (the optional `ros` extra: `pip install "occtrack[ros]"`).
 
+The topic: the one LaserScan topic of the bag or, among several, `/scan`, the name ROS's
+laser drivers and its navigation, mapping and leg-tracking nodes take by default (a robot's
+main laser); with several and no `/scan`, the caller must choose.
+
 One sensor_msgs/msg/LaserScan message is one scan: beam k at angle_min + k angle_increment,
 its range as sent (float32, widened exactly to float64), the beams in increasing angle (a
 scanner turning clockwise, angle_increment < 0, has its beams reversed). REP 117 readings:
@@ -48,6 +52,7 @@ from occtrack.errors import OcctrackError
 from occtrack.io.scans import Scans
 
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
+DEFAULT_TOPIC = "/scan"  # ROS's conventional name for a robot's laser
 TF_TYPES = ("tf2_msgs/msg/TFMessage", "tf/msg/tfMessage")
 ODOMETRY = "nav_msgs/msg/Odometry"
 STAMPS = ("record", "header")
@@ -116,7 +121,8 @@ def _yaw(q) -> float:
 def read_bag_scans(path: str | os.PathLike, topic: str | None = None,
                    fixed_frame: str | None = None,
                    stamps: str = "record") -> tuple[Scans, np.ndarray | None, BagScans]:
-    """The LaserScan messages of `topic` (default: the bag's one LaserScan topic) as Scans,
+    """The LaserScan messages of `topic` (default: the bag's one LaserScan topic, or
+    `DEFAULT_TOPIC` among several) as Scans,
     the sensor's pose a scan in `fixed_frame` ((S, 3) x, y, heading; None without a fixed
     frame), and what was read (see the module docstring). Any problem with the bag, the
     topic, the scans or the transforms is one OcctrackError naming the bag."""
@@ -155,6 +161,8 @@ def _pick_topic(reader, name: str, topic: str | None) -> tuple[str, tuple[str, .
         found = ", ".join(sorted(reader.topics)) or "none"
         raise OcctrackError(f"no sensor_msgs/LaserScan topic in the bag (its topics: {found})",
                             name)
+    if len(lasers) > 1 and DEFAULT_TOPIC in lasers:
+        return DEFAULT_TOPIC, lasers
     if len(lasers) > 1:
         raise OcctrackError(f"{len(lasers)} LaserScan topics ({', '.join(lasers)}); pass "
                             f"--topic to choose one", name)
