@@ -164,9 +164,9 @@ class Truth:
 
 @dataclass(frozen=True)
 class Tracks:
-    """A tracks file's rows as arrays (the fields of `occtrack.tracker.ScanTrackResult`, so
-    `write_tracks` writes it back): time, id, position (N, 2), velocity (N, 2), existence,
-    confidence, occluded (bool)."""
+    """A scan tracker's rows, one an object a scan, as arrays: time, id, position (N, 2),
+    velocity (N, 2), existence, confidence, occluded (bool); `path` the tracks file they were
+    read from ("" for a run's own: `occtrack.tracker.ScanTrackResult` is this class)."""
 
     time: np.ndarray
     id: np.ndarray

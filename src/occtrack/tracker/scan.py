@@ -33,6 +33,7 @@ from scipy.spatial import cKDTree
 
 from occtrack.config.scan import CENTIMETRES, ScanTrackerConfig
 from occtrack.filters.gmpmb import GaussianMixturePMB
+from occtrack.io.scans import Tracks
 from occtrack.models.beam import BeamModel
 from occtrack.models.clutter_map import ClutterMap
 from occtrack.models.point import PointMeasurement
@@ -65,21 +66,10 @@ class ScanTracks:
         return len(self.ids)
 
 
-@dataclass(frozen=True)
-class ScanTrackResult:
-    """Every reported object of a run, one row an object a scan: time, id, position (N, 2),
-    velocity (N, 2), existence, confidence, occluded."""
-
-    time: np.ndarray
-    id: np.ndarray
-    position: np.ndarray
-    velocity: np.ndarray
-    existence: np.ndarray
-    confidence: np.ndarray
-    occluded: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.time)
+ScanTrackResult = Tracks
+"""Every reported object of a run, one row an object a scan: time, id, position (N, 2),
+velocity (N, 2), existence, confidence, occluded; a tracks file's rows (`io.scans.Tracks`,
+which `write_tracks` writes and `read_tracks` reads back)."""
 
 
 class ScanTracker:
