@@ -105,3 +105,27 @@ def test_a_ring_of_spurious_returns_stops_making_people_there():
     assert ring_off > 0.5
     assert ring_on < ring_off / 4
     assert found_on >= found_off - 3
+
+
+def test_a_kept_person_explains_the_returns_a_leg_of_theirs_can_make():
+    """With legs, a return within half a stride and a leg's radius of a person the pairing
+    keeps (0.4 + 0.1 m: the outer edge of a leg a full stride from the other) is theirs, not
+    clutter, whether or not a leg track took it; one further out is clutter."""
+    from occtrack.config.scan import ScanTrackerConfig
+    from occtrack.tracker.scan import ScanTracker
+
+    config = ScanTrackerConfig(max_range=5.6, body="legs")
+    reach = config.leg_separation / 2 + config.leg_radius
+    angles = np.linspace(-0.5, 0.5, 101)
+    tracker = ScanTracker(config, beams=len(angles), rate=10.0)
+    tracker.update(np.full(len(angles), np.inf), angles, 0.0)
+    half = config.leg_separation / 2 - 0.01
+    tracker.pairing.update(0.0, np.array([1, 2]), np.array([[2.0, half], [2.0, -half]]),
+                           np.zeros((2, 2)), np.full(2, 0.9), np.full(2, 0.9))
+    np.testing.assert_allclose(tracker.pairing.kept_positions(), [[2.0, 0.0]])
+    on = {}
+    for d in (reach - 0.01, reach + 0.01):  # straight ahead, behind the person's midpoint
+        ranges = np.full(len(angles), np.inf)
+        ranges[50] = 2.0 + d
+        on[d] = bool(tracker._on_objects(angles, ranges, np.zeros(2))[50])
+    assert on == {reach - 0.01: True, reach + 0.01: False}
