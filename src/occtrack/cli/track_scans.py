@@ -39,11 +39,12 @@ SCANS may also be a ROS bag (needs the ros extra: pip install "occtrack[ros]"): 
 file, a ROS 2 bag folder (holding metadata.yaml), or its .db3 or .mcap file. Its
 sensor_msgs/LaserScan messages are the scans (among several, /scan, ROS's conventional name
 for a robot's laser; --topic chooses another): beam k at angle_min + k angle_increment
-(reversed when angle_increment < 0), ranges as sent, inf for no return. A reading REP 117 calls invalid (nan, -inf, or outside [range_min, range_max]) says
-nothing about its beam and is left out of its scan, with a warning giving the count. A scan's
-time is the bag's record time, the clock the benchmark annotations of recorded bags use
-(a header stamp may come from another machine's clock); --stamps header takes header.stamp.
-The sensor's range_max is the tracker's max_range unless the --config file sets max_range.
+(reversed when angle_increment < 0), ranges as sent, inf for no return. A reading REP 117
+calls invalid (nan, -inf, or outside [range_min, range_max]) says nothing about its beam and
+is left out of its scan, with a warning giving the count. A scan's time is the bag's record
+time, the clock the benchmark annotations of recorded bags use (a header stamp may come from
+another machine's clock); --stamps header takes header.stamp. The sensor's range_max is the
+tracker's max_range unless the --config file sets max_range.
 The tracks are in the scanner's frame (header.frame_id), unless --fixed-frame FRAME gives
 the sensor's pose a scan in FRAME from the bag's /tf and /tf_static transforms (or a
 nav_msgs/Odometry topic), interpolated to each scan's time.
