@@ -386,3 +386,40 @@ def test_what_the_ground_tracker_remembers_is_bounded_by_the_scene():
         most = max(most, len(tracker._shape), len(tracker._evidence))
     assert len(seen) >= 75
     assert most <= SHAPE_MEMORY / 3.0 + 2
+
+
+def test_one_object_reported_under_two_classes_is_one_track_with_a_count():
+    """A cyclist that the detector also reports, lower scored, as a pedestrian at the same
+    place: one track, of the cyclist's class, on the cyclist's row; each walker box counted."""
+    tracker = GroundTracker(ground_config({"occlusion": "none"}))
+    for f in range(10):
+        z = 15.0 + 0.5 * f
+        walker = [1.7, 0.6, 0.8, 0.1, 1.6, z + 0.1, 0.0]
+        cyclist = [1.7, 0.6, 1.8, 0.0, 1.6, z, 0.0]
+        tracks = tracker.update(np.array([walker, cyclist]), [0.8, 0.99], [3, 5])
+    assert tracker.duplicates_dropped == 10
+    assert len(tracks) == 1 and tracks.classes.tolist() == [5]
+    assert tracks.detection_index.tolist() == [1]  # the given row, not the kept one's
+    np.testing.assert_allclose(tracks.boxes3d[0], cyclist)
+    both = GroundTracker(ground_config({"occlusion": "none"}), duplicate_overlap=None)
+    for f in range(10):
+        z = 15.0 + 0.5 * f
+        tracks = both.update(np.array([[1.7, 0.6, 0.8, 0.1, 1.6, z + 0.1, 0.0],
+                                       [1.7, 0.6, 1.8, 0.0, 1.6, z, 0.0]]), [0.8, 0.99], [3, 5])
+    assert sorted(tracks.classes.tolist()) == [3, 5] and both.duplicates_dropped == 0
+    with pytest.raises(ValueError, match="duplicate_overlap"):
+        GroundTracker(duplicate_overlap=1.5)
+
+
+def test_track_3d_says_how_many_duplicates_it_dropped(tmp_path, capsys):
+    rows = []
+    for f in range(6):
+        z = 20.0 - 0.5 * f
+        rows.append(f"{f} -1 Car -1 -1 0 500 150 600 220 1.5 1.7 4.0 1.0 1.6 {z} 0.1 4.0")
+        rows.append(f"{f} -1 Cyclist -1 -1 0 505 150 600 220 1.5 1.0 1.8 1.2 1.6 {z} 0.1 -1")
+    det = _layout(tmp_path, rows, 6)
+    out = tmp_path / "out.txt"
+    assert main(["track", str(det), "-o", str(out), "--3d"]) == 0
+    err = capsys.readouterr().err
+    assert "6 boxes dropped as the duplicate of a higher-scored box" in err and str(det) in err
+    assert set(read_kitti(out).type.tolist()) == {0}  # the cars only

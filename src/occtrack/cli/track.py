@@ -62,7 +62,9 @@ else from DIR/seqinfo/NNNN.ini when the file sits in a KITTI layout (DIR/det_02/
 3D (--3d, KITTI files with the 3D columns, e.g. PointRCNN's): each class's boxes are tracked
 on the ground plane (occtrack.tracker.ground: the footprint's centre, velocity and size in
 metres and seconds; height, elevation and heading carried from the detections), occlusion
-seen from the sensor (nearer boxes hide the angles behind them). The camera's path comes from
+seen from the sensor (nearer boxes hide the angles behind them). Two boxes whose footprints
+overlap by half of the smaller one or more are one object seen twice (under two classes, say):
+the lower-scored one is dropped, with a count. The camera's path comes from
 --poses FILE (one 3x4 [R|t] a frame, KITTI's poses/NNNN.txt, found beside a KITTI layout),
 else the camera is taken as still; the calibration's P2 (--calib FILE, KITTI's calib/NNNN.txt,
 found beside a KITTI layout; required) projects a coasting box into the image for the 2D
@@ -374,8 +376,11 @@ def _track_3d(args: argparse.Namespace, config, length: int | None) -> int:
     for note in notes:
         print(f"occtrack track: warning: {args.detections}: {note}", file=sys.stderr)
     start = time.perf_counter()
+    dropped: list[str] = []
     result = track_kitti(table, frames, config, poses, calibration, config.image_size,
-                         quiet=args.quiet)
+                         quiet=args.quiet, notes=dropped)
+    for note in dropped:
+        print(f"occtrack track: note: {args.detections}: {note}", file=sys.stderr)
     theta = np.arctan2(result.box3d[:, 3], result.box3d[:, 5])
     alpha = (result.box3d[:, 6] - theta + np.pi) % (2 * np.pi) - np.pi
     kitti.write_kitti(args.output, result.frame, result.id, result.type, result.box,

@@ -252,8 +252,10 @@ def track(name: str, seq: Sequence, classes: tuple[str, ...],
           settings: dict | None = None) -> KittiTable:
     """One tracker on a sequence's boxes of `classes`: occtrack (by occlusion model, with
     `settings` over the defaults) on all of them at once, a peer class by class. For a 3D
-    sequence (`Sequence.three_d`) occtrack tracks the 3D boxes on the ground plane and its
-    result has the 3D columns; a peer tracks the 2D boxes."""
+    sequence (`Sequence.three_d`) occtrack tracks the 3D boxes on the ground plane, every
+    class the detector reports (a box of one class can be the duplicate of a higher-scored
+    box of another at the same place, `occtrack.models.footprints`), and its result has the
+    3D columns; a peer tracks the 2D boxes."""
     types = [CLASS_TYPE[c] for c in classes]
     det = seq.det.select(np.isin(seq.det.cls, types))
     if name in MODELS and seq.three_d:
@@ -262,9 +264,8 @@ def track(name: str, seq: Sequence, classes: tuple[str, ...],
         assert seq.table is not None
         config = ground_config({**(settings or {}), "occlusion": name, "fps": seq.fps,
                                 "image_size": (seq.width, seq.height)})
-        return track_kitti(seq.table.select(np.isin(seq.table.type, types)), seq.length,
-                           config, seq.poses, seq.calibration, (seq.width, seq.height),
-                           quiet=True)
+        return track_kitti(seq.table, seq.length, config, seq.poses, seq.calibration,
+                           (seq.width, seq.height), quiet=True)
     if name in MODELS:
         config = TrackerConfig.from_dict({**(settings or {}), "occlusion": name,
                                           "fps": seq.fps,

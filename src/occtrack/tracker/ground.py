@@ -30,6 +30,13 @@ from the sensor goes on moving: the ground's defaults (`GROUND_DEFAULTS`) keep a
 object's velocity (`coast_velocity_time` infinite), where the image boxes' let it fade in
 0.1 s.
 
+One place, one object. A lidar detector scores each class on its own, and one object can
+come out twice (a cyclist also as a pedestrian, at a lower score). Two solid objects cannot
+stand on the same ground: a box whose footprint overlaps a higher-scored box's by half of the
+smaller footprint or more is dropped before the filter, with a count
+(`occtrack.models.footprints`). Otherwise the second class's track is a false object for as
+long as the first is a true one.
+
 What an object's scores say (`score_evidence`). A lidar detector reports the same wall or
 hedge as a car frame after frame, and once such a track is confirmed the filter takes its
 detections as an object's, however low their scores. Each object's scores are therefore
@@ -53,6 +60,7 @@ import numpy as np
 import numpy.typing as npt
 
 from occtrack.config import TrackerConfig
+from occtrack.models.footprints import DUPLICATE_OVERLAP, duplicates, footprints
 from occtrack.models.score_model import ScoreLearner
 from occtrack.occlusion.sensor_view import SensorViewGeometry, sensor_view_occlusion
 from occtrack.tracker.boxes import as_array, check_time
@@ -149,12 +157,9 @@ def heading_of(vectors: np.ndarray) -> np.ndarray:
 
 def ground_corners(boxes3d: np.ndarray) -> np.ndarray:
     """(M, 4, 3) the four bottom corners of KITTI 3D boxes, in the boxes' camera frame."""
-    h, w, l, x, y, z, ry = boxes3d.T
-    dl = np.array([0.5, 0.5, -0.5, -0.5])[None] * l[:, None]
-    dw = np.array([0.5, -0.5, -0.5, 0.5])[None] * w[:, None]
-    c, s = np.cos(ry)[:, None], np.sin(ry)[:, None]
-    return np.stack([x[:, None] + c * dl + s * dw, np.broadcast_to(y[:, None], dl.shape),
-                     z[:, None] - s * dl + c * dw], axis=-1)
+    xz = footprints(boxes3d)[:, ::-1]  # (clockwise in (x, z), as this has always listed them)
+    y = np.broadcast_to(np.asarray(boxes3d, dtype=float).reshape(-1, 7)[:, 4, None], xz.shape[:2])
+    return np.stack([xz[..., 0], y, xz[..., 1]], axis=-1)
 
 
 class GroundTracker:
@@ -168,10 +173,15 @@ class GroundTracker:
         reach: metres around the sensor that the filter holds.
         score_evidence: weigh each object's scores as evidence that it is real (see the
             module); False reports the filter's confidence alone.
+        duplicate_overlap: a box whose footprint and a higher-scored box's overlap by at least
+            this share of the smaller one is the same object seen twice and is dropped
+            (`occtrack.models.footprints`; counted in `duplicates_dropped`); None keeps every
+            box.
     """
 
     def __init__(self, config: TrackerConfig | None = None, reach: float = REACH,
-                 score_evidence: bool = True):
+                 score_evidence: bool = True,
+                 duplicate_overlap: float | None = DUPLICATE_OVERLAP):
         if config is not None and not isinstance(config, TrackerConfig):
             raise ValueError(f"config must be a TrackerConfig, not {type(config).__name__}")
         if not (math.isfinite(reach) and reach > 0):
@@ -179,6 +189,10 @@ class GroundTracker:
         c = config or ground_config()
         self.reach = float(reach)
         self.score_evidence = bool(score_evidence)
+        if duplicate_overlap is not None and not 0 < duplicate_overlap <= 1:
+            raise ValueError(f"duplicate_overlap must be in (0, 1] or None, not "
+                             f"{duplicate_overlap}")
+        self.duplicate_overlap = duplicate_overlap
         side = 2 * self.reach / UNIT
         self.config = replace(c, image_size=(side, side), camera_motion="none")
         self.geometry = SensorViewGeometry(c.occlusion_gain, *c.occlusion_ramp,
@@ -193,6 +207,7 @@ class GroundTracker:
         self._origin: np.ndarray | None = None  # world (x, z) of the filter frame's corner
         self._time = 0.0  # s since the first frame
         self._steps = 0
+        self.duplicates_dropped = 0  # boxes dropped as another box's duplicate, so far
         self._shape: dict[int, np.ndarray] = {}  # id -> h, w, l, world y, world yaw, time
         c = self.config  # the score densities the evidence reads (see the module)
         self._evidence_scores = ScoreLearner(c.score_floor, c.clutter_score_power,
@@ -208,7 +223,17 @@ class GroundTracker:
         boxes = check_boxes3d(boxes3d)
         P = check_pose(pose)
         R, t = P[:, :3], P[:, 3]
-        corners = ground_corners(boxes) @ R.T + t  # (M, 4, 3) in the world
+        given = np.ones(len(boxes)) if scores is None else \
+            np.asarray(scores, dtype=float).reshape(-1)
+        kept = np.arange(len(boxes))
+        if self.duplicate_overlap is not None and len(given) == len(boxes) and (
+                classes is None or np.size(classes) == len(boxes)):  # (else update says why)
+            kept = np.flatnonzero(~duplicates(boxes, given, self.duplicate_overlap))
+            self.duplicates_dropped += len(boxes) - len(kept)
+        if len(kept) < len(boxes):
+            scores = None if scores is None else given[kept]
+            classes = None if classes is None else np.asarray(classes).reshape(-1)[kept]
+        corners = ground_corners(boxes[kept]) @ R.T + t  # (M, 4, 3) in the world
         origin = t[[0, 2]] - self.reach
         shift = np.zeros(2) if self._origin is None else self._origin - origin
         low = (corners[..., [0, 2]].min(axis=1) - origin) / UNIT
@@ -216,6 +241,9 @@ class GroundTracker:
         ltwh = np.concatenate([low, high - low], axis=1)
         affine = np.array([[1.0, 0.0, shift[0] / UNIT], [0.0, 1.0, shift[1] / UNIT]])
         tracks = self.tracker.update(ltwh, scores, classes, timestamp, "ltwh", affine)
+        index = tracks.detection_index.copy()  # (of the kept boxes: of the given ones)
+        index[index >= 0] = kept[index[index >= 0]]
+        tracks = replace(tracks, detection_index=index)
         self._origin = origin
         if timestamp is not None:
             self._time = check_time(timestamp, "timestamp")
@@ -223,19 +251,17 @@ class GroundTracker:
             self._time += self.tracker.filter.dt if self._steps else 0.0
         self._steps += 1
         if self.score_evidence:
-            given = np.ones(len(boxes)) if scores is None else \
-                np.asarray(scores, dtype=float).reshape(-1)
-            tracks = self._weigh_scores(tracks, given)
+            tracks = self._weigh_scores(tracks, given, kept)
         return self._report(tracks, boxes, R, t, origin)
 
-    def _weigh_scores(self, tracks, scores: np.ndarray):
+    def _weigh_scores(self, tracks, scores: np.ndarray, kept: np.ndarray):
         """The reported tracks with each confidence times the probability that the object is
         real given the scores of every detection it took (see the module); those left under
         `report_min_confidence` are not reported."""
         n = len(tracks)
         llr = np.zeros(n)
         took = tracks.detection_index >= 0
-        self._evidence_scores.update(scores, self.tracker.filter.clutter_probability,
+        self._evidence_scores.update(scores[kept], self.tracker.filter.clutter_probability,
                                      self.tracker.filter.dt)
         if took.any():
             llr[took] = self._evidence_scores.log_likelihood_ratio(
@@ -309,7 +335,8 @@ def detection_scores(score: np.ndarray) -> np.ndarray:
 
 def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
                 poses: np.ndarray | None = None, calibration=None,
-                image_size: tuple[float, float] | None = None, quiet: bool = True):
+                image_size: tuple[float, float] | None = None, quiet: bool = True,
+                notes: list[str] | None = None):
     """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
     0..num_frames-1, every class at once, each object keeping its own) and return the result
     as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
@@ -318,7 +345,8 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     out of the file: the camera sees no part of it beyond the border, so its clipped
     projection is not the box a camera would show (KITTI labels such an object truncated and
     does not score it). `poses` (F, 3, 4) the camera's path;
-    None: a still camera. The score column is the confidence."""
+    None: a still camera. The score column is the confidence. `notes`, when given, gets a
+    line on the boxes dropped as duplicates of another box (`GroundTracker`)."""
     from occtrack.io.kitti import KittiTable
     from occtrack.io.kitti_geometry import project_boxes
     from occtrack.progress import progress
@@ -355,6 +383,10 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
         rows["box"].append(box[keep])
         rows["box3d"].append(tracks.boxes3d[keep])
         rows["score"].append(tracks.confidence[keep])
+    if notes is not None and tracker.duplicates_dropped:
+        notes.append(f"{tracker.duplicates_dropped} boxes dropped as the duplicate of a "
+                     f"higher-scored box at the same place (footprints overlapping by "
+                     f"{tracker.duplicate_overlap:g} of the smaller one's or more)")
     cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in rows.items()}
     n = len(cat["frame"])
     return KittiTable(frame=cat["frame"].astype(np.int64), id=cat["id"].astype(np.int64),
