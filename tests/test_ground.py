@@ -423,3 +423,23 @@ def test_track_3d_says_how_many_duplicates_it_dropped(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "6 boxes dropped as the duplicate of a higher-scored box" in err and str(det) in err
     assert set(read_kitti(out).type.tolist()) == {0}  # the cars only
+
+
+def test_track_3d_classes_writes_the_picked_types_and_still_sees_the_others(tmp_path, capsys):
+    """--classes Pedestrian: the cyclist is tracked (not written), so the walker box that
+    duplicates it is dropped and no pedestrian track follows the cyclist."""
+    rows = []
+    for f in range(8):
+        z = 12.0 + 0.3 * f
+        rows.append(f"{f} -1 Cyclist -1 -1 0 500 150 600 300 1.7 0.6 1.8 0.0 1.6 {z} 0.0 5.0")
+        rows.append(f"{f} -1 Pedestrian -1 -1 0 505 150 600 300 1.7 0.6 0.8 0.1 1.6 {z} 0 2.0")
+        rows.append(f"{f} -1 Pedestrian -1 -1 0 800 150 850 300 1.7 0.6 0.8 4.0 1.6 15 0 5.0")
+    det = _layout(tmp_path, rows, 8)
+    out = tmp_path / "out.txt"
+    assert main(["track", str(det), "-o", str(out), "--3d", "--classes", "Pedestrian"]) == 0
+    err = capsys.readouterr().err
+    assert "8 rows of types not picked (--classes) tracked, their tracks not written" in err
+    assert "8 boxes dropped as the duplicate" in err
+    result = read_kitti(out)
+    assert set(result.type.tolist()) == {3} and len(np.unique(result.id)) == 1
+    np.testing.assert_allclose(result.box3d[:, 3], 4.0)  # the walker standing apart

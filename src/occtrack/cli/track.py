@@ -64,7 +64,9 @@ on the ground plane (occtrack.tracker.ground: the footprint's centre, velocity a
 metres and seconds; height, elevation and heading carried from the detections), occlusion
 seen from the sensor (nearer boxes hide the angles behind them). Two boxes whose footprints
 overlap by half of the smaller one or more are one object seen twice (under two classes, say):
-the lower-scored one is dropped, with a count. The camera's path comes from
+the lower-scored one is dropped, with a count. With --classes every type is still tracked (an
+unpicked one can hide a picked one or be the box it duplicates) and only the picked types'
+tracks are written. The camera's path comes from
 --poses FILE (one 3x4 [R|t] a frame, KITTI's poses/NNNN.txt, found beside a KITTI layout),
 else the camera is taken as still; the calibration's P2 (--calib FILE, KITTI's calib/NNNN.txt,
 found beside a KITTI layout; required) projects a coasting box into the image for the 2D
@@ -351,10 +353,9 @@ def _track_3d(args: argparse.Namespace, config, length: int | None) -> int:
     table = kitti.read_kitti(args.detections)
     types = (None if args.classes is None else kitti.parse_classes(args.classes))
     keep = (table.type != kitti.DONTCARE) & (table.type != kitti.UNKNOWN)
-    if types is not None:
-        keep &= np.isin(table.type, types)
     skipped = int((~keep).sum())
-    table = table.select(keep)
+    table = table.select(keep)  # (every type tracked: an unpicked one hides and duplicates)
+    unpicked = 0 if types is None else int((~np.isin(table.type, types)).sum())
     frames = max(length or 0, table.num_frames)
     if length is not None and len(table) and table.num_frames > length:
         i = int(np.argmax(table.frame))
@@ -370,7 +371,10 @@ def _track_3d(args: argparse.Namespace, config, length: int | None) -> int:
     calibration = geometry.read_calib(calib)
     poses_file = args.poses or geometry.find_poses(args.detections)
     poses = None if poses_file is None else geometry.read_poses(poses_file, frames)
-    notes = [f"{skipped} rows skipped (DontCare, unknown or unpicked types)"] if skipped else []
+    notes = [f"{skipped} rows skipped (DontCare or unknown types)"] if skipped else []
+    if unpicked:
+        notes.append(f"{unpicked} rows of types not picked (--classes) tracked, their tracks "
+                     f"not written")
     if poses is None:
         notes.append("no poses (--poses FILE): the camera is taken as still")
     for note in notes:
@@ -378,7 +382,7 @@ def _track_3d(args: argparse.Namespace, config, length: int | None) -> int:
     start = time.perf_counter()
     dropped: list[str] = []
     result = track_kitti(table, frames, config, poses, calibration, config.image_size,
-                         quiet=args.quiet, notes=dropped)
+                         quiet=args.quiet, notes=dropped, written=types)
     for note in dropped:
         print(f"occtrack track: note: {args.detections}: {note}", file=sys.stderr)
     theta = np.arctan2(result.box3d[:, 3], result.box3d[:, 5])

@@ -336,7 +336,7 @@ def detection_scores(score: np.ndarray) -> np.ndarray:
 def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
                 poses: np.ndarray | None = None, calibration=None,
                 image_size: tuple[float, float] | None = None, quiet: bool = True,
-                notes: list[str] | None = None):
+                notes: list[str] | None = None, written=None):
     """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
     0..num_frames-1, every class at once, each object keeping its own) and return the result
     as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
@@ -346,7 +346,9 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     projection is not the box a camera would show (KITTI labels such an object truncated and
     does not score it). `poses` (F, 3, 4) the camera's path;
     None: a still camera. The score column is the confidence. `notes`, when given, gets a
-    line on the boxes dropped as duplicates of another box (`GroundTracker`)."""
+    line on the boxes dropped as duplicates of another box (`GroundTracker`). `written`: the
+    types whose tracks are written (None: every type); every type is tracked, as a box of
+    another type can hide one of these or be the one it duplicates."""
     from occtrack.io.kitti import KittiTable
     from occtrack.io.kitti_geometry import project_boxes
     from occtrack.progress import progress
@@ -377,6 +379,8 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
             projected[cut] = np.nan
             box[~took] = projected
         keep = np.isfinite(box).all(axis=1)
+        if written is not None:
+            keep &= np.isin(tracks.classes, written)
         rows["frame"].append(np.full(int(keep.sum()), f))
         rows["id"].append(tracks.ids[keep])
         rows["type"].append(tracks.classes[keep])
