@@ -217,6 +217,18 @@ def test_bev_draws_the_frame(det_file, tmp_path, capsys):
     assert capsys.readouterr().out == ""
 
 
+def test_bev_classes_draws_the_picked_types_of_a_run_that_tracks_them_all(tmp_path, capsys):
+    rows = [kitti_row(f, 0.0, 10.0) for f in range(3)]
+    rows += [kitti_row(f, 5.0, 12.0, kind="Cyclist") for f in range(3)]
+    det = tmp_path / "det.txt"
+    det.write_text("\n".join(rows) + "\n")
+    assert bev(det, "--frame", 2, "--fps", 10, "-o", tmp_path / "all.png") == 0
+    assert capsys.readouterr().out.startswith("drew frame 2: 2 detections, 2 tracks")
+    assert bev(det, "--frame", 2, "--fps", 10, "-o", tmp_path / "cars.png",
+               "--classes", "Car") == 0
+    assert capsys.readouterr().out.startswith("drew frame 2: 1 detections, 1 tracks")
+
+
 def test_bev_a_frame_past_the_file_is_one_line(det_file, tmp_path, capsys):
     out = tmp_path / "bev.png"
     assert bev(det_file, "--frame", 3, "--fps", 10, "-o", out) == 1

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 
@@ -59,8 +60,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="KITTI calibration whose P2 gives the field of view (default: "
                              "DIR/calib/NNNN.txt beside a KITTI layout, else 90 degrees)")
     parser.add_argument("--classes", metavar="LIST",
-                        help="comma list of types to track and draw, e.g. Car,Pedestrian "
-                             "(default: every type in the file)")
+                        help="comma list of types to draw, e.g. Car,Pedestrian (default: "
+                             "every type in the file); every type is tracked, as with "
+                             "track --3d")
     parser.add_argument("--occlusion", choices=OCCLUSION_NAMES, default=None,
                         help="occlusion model (default: object-wise, or the config file's)")
     parser.add_argument("--config", metavar="FILE", help="TOML file of tracker settings")
@@ -168,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
     info = None if seq is None else read_seqinfo(seq)
     config = _config(args, info)
     types = None if args.classes is None else kitti.parse_classes(args.classes)
-    table = _kept(kitti.read_kitti(args.detections), types)
+    table = _kept(kitti.read_kitti(args.detections), None)  # every type tracked (`track --3d`)
     unknown = np.flatnonzero(table.box3d[:, 3] <= -999)
     if len(unknown):
         line = None if table.line is None else int(table.line[unknown[0]])
@@ -200,6 +202,11 @@ def run(args: argparse.Namespace) -> int:
 
     start = time.perf_counter()
     tracks, sel, scores = track_until(table, frame, config, poses, args.quiet)
+    if types is not None:  # only the picked types drawn
+        sel = sel[np.isin(table.type[sel], types)]
+        picked = np.isin(tracks.classes, types)
+        tracks = type(tracks)(**{f.name: getattr(tracks, f.name)[picked]
+                                 for f in dataclasses.fields(tracks)})
     if calibration is None:
         fov = FIXED_FOV
     else:
