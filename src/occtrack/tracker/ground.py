@@ -257,7 +257,8 @@ class GroundTracker:
     def _weigh_scores(self, tracks, scores: np.ndarray, kept: np.ndarray):
         """The reported tracks with each confidence times the probability that the object is
         real given the scores of every detection it took (see the module); those left under
-        `report_min_confidence` are not reported."""
+        `report_min_confidence` are not reported. `scores` are the given boxes', `kept` the
+        rows the filter saw (the others were duplicates)."""
         n = len(tracks)
         llr = np.zeros(n)
         took = tracks.detection_index >= 0
@@ -336,7 +337,7 @@ def detection_scores(score: np.ndarray) -> np.ndarray:
 def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
                 poses: np.ndarray | None = None, calibration=None,
                 image_size: tuple[float, float] | None = None, quiet: bool = True,
-                notes: list[str] | None = None, written=None):
+                notes: list[str] | None = None, written: npt.ArrayLike | None = None):
     """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
     0..num_frames-1, every class at once, each object keeping its own) and return the result
     as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
