@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 import time
 
@@ -204,9 +203,7 @@ def run(args: argparse.Namespace) -> int:
     tracks, sel, scores = track_until(table, frame, config, poses, args.quiet)
     if types is not None:  # only the picked types drawn
         sel = sel[np.isin(table.type[sel], types)]
-        picked = np.isin(tracks.classes, types)
-        tracks = type(tracks)(**{f.name: getattr(tracks, f.name)[picked]
-                                 for f in dataclasses.fields(tracks)})
+        tracks = tracks.select(np.isin(tracks.classes, types))
     if calibration is None:
         fov = FIXED_FOV
     else:

@@ -112,6 +112,12 @@ class GroundTracks:
     def coasting(self) -> np.ndarray:
         return self.detection_index < 0
 
+    def select(self, keep: np.ndarray) -> GroundTracks:
+        """The objects where `keep` (n,) bool is True, in the same order (`Tracks.select`)."""
+        return GroundTracks(self.ids[keep], self.boxes3d[keep], self.existence[keep],
+                            self.confidence[keep], self.velocities[keep],
+                            self.detection_index[keep], self.classes[keep], self.occluded[keep])
+
 
 def ground_config(values: dict | None = None, source: str = "configuration") -> TrackerConfig:
     """A TrackerConfig for the ground: `GROUND_DEFAULTS` under the given values."""
