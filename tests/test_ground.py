@@ -443,3 +443,41 @@ def test_track_3d_classes_writes_the_picked_types_and_still_sees_the_others(tmp_
     result = read_kitti(out)
     assert set(result.type.tolist()) == {3} and len(np.unique(result.id)) == 1
     np.testing.assert_allclose(result.box3d[:, 3], 4.0)  # the walker standing apart
+
+
+def test_a_walker_is_drawn_as_the_cylinder_in_its_box_unless_its_2d_box_is_its_own(tmp_path):
+    """A person fills the elliptic cylinder inscribed in the 3D box, not its corners: a
+    walker whose 2D box is only its 3D box's corners projected (as PointRCNN writes it) is
+    written with the cylinder's box; a walker with a 2D box of the detector's own, and a car,
+    keep theirs."""
+    from occtrack.io.kitti_geometry import project_boxes, project_cylinders
+
+    p2 = np.array([[721.5, 0, 609.6, 44.9], [0, 721.5, 172.9, 0.2], [0, 0, 1, 0.003]])
+    rows, own = [], [300.0, 120.0, 330.0, 220.0]
+    for f in range(6):
+        walker = np.array([1.7, 0.6, 0.8, -2.0, 1.6, 12.0 + 0.1 * f, 0.8])
+        corners = project_boxes(walker[None], p2, (1241, 374))[0]
+        other = walker + [0, 0, 0, -4.0, 0, 0, 0]
+        car = np.array([1.5, 1.7, 4.0, 4.0, 1.6, 20.0 - 0.5 * f, 0.1])
+        rows += [f"{f} -1 Pedestrian -1 -1 0 {' '.join(f'{v:.4f}' for v in corners)} "
+                 f"{' '.join(f'{v:.4f}' for v in walker)} 4.0",
+                 f"{f} -1 Pedestrian -1 -1 0 {' '.join(map(str, own))} "
+                 f"{' '.join(f'{v:.4f}' for v in other)} 4.0",
+                 f"{f} -1 Car -1 -1 0 700 150 800 220 {' '.join(f'{v:.4f}' for v in car)} 4.0"]
+    det = _layout(tmp_path, rows, 6)
+    out = tmp_path / "out.txt"
+    assert main(["track", str(det), "-o", str(out), "--3d", "--quiet"]) == 0
+    result = read_kitti(out)
+    last = result.frame == 5
+    assert last.sum() == 3
+    for box, box3d, kind in zip(result.box[last], result.box3d[last], result.type[last],
+                                strict=True):
+        if kind == 0:
+            np.testing.assert_allclose(box, [700, 150, 800, 220])
+        elif box3d[3] < -4:
+            np.testing.assert_allclose(box, own)
+        else:
+            cylinder = project_cylinders(box3d[None], p2)[0]
+            np.testing.assert_allclose(box, cylinder, atol=0.006)  # (2 decimals)
+            corners = project_boxes(box3d[None], p2, (1242, 375))[0]
+            assert box[2] - box[0] < 0.9 * (corners[2] - corners[0])  # turned 0.8 rad

@@ -200,12 +200,13 @@ def footprint(box3d: np.ndarray) -> np.ndarray:
 
 
 def project_boxes(box3d: np.ndarray, P2: np.ndarray, image_size: tuple[float, float],
-                  min_depth: float = 0.1) -> np.ndarray:
+                  min_depth: float = 0.1, round_: np.ndarray | None = None) -> np.ndarray:
     """The (N, 4) image boxes x1 y1 x2 y2 that the corners of (N, 7) KITTI boxes project to with
     `P2`, clipped to [0, width] x [0, height] (`image_size` = (width, height)). A row is NaN
     when a corner lies nearer than `min_depth` (m, camera z; behind the camera, as KITTI devkit
     drops it) or the clipped box is empty (the box is wholly outside the image); KITTI's
-    unknown 3D values (z = -1000) therefore give NaN."""
+    unknown 3D values (z = -1000) therefore give NaN. `round_` (N,) bool: those rows project
+    the elliptic cylinder inscribed in the box instead of its corners (`project_cylinders`)."""
     corners = box3d_corners(box3d)
     P2 = np.asarray(P2, dtype=float)
     image = corners @ P2[:, :3].T + P2[:, 3]  # (N, 8, 3)
@@ -213,10 +214,53 @@ def project_boxes(box3d: np.ndarray, P2: np.ndarray, image_size: tuple[float, fl
     with np.errstate(divide="ignore", invalid="ignore"):
         uv = image[:, :, :2] / image[:, :, 2:]
         box = np.concatenate([uv.min(axis=1), uv.max(axis=1)], axis=1)
+    if round_ is not None and np.any(round_):
+        which = np.flatnonzero(round_)
+        box[which] = project_cylinders(np.asarray(box3d, dtype=float)[which], P2)
     box = clip_to_image(box, image_size)
     keep = ahead & (box[:, 2] > box[:, 0]) & (box[:, 3] > box[:, 1])
     box[~keep] = np.nan
     return box
+
+
+def project_cylinders(box3d: np.ndarray, P2: np.ndarray) -> np.ndarray:
+    """The (N, 4) image boxes x1 y1 x2 y2, unclipped, of the upright elliptic cylinders
+    inscribed in (N, 7) KITTI boxes (axes l / 2 along the heading and w / 2 across it, from the
+    ground to h above it), every point ahead of the camera.
+
+    A person fills that cylinder, not the box's corners: seen at 45 degrees a person's box
+    projects up to sqrt(2) times as wide as the person (`occtrack.io.kitti.ROUND_TYPES`). The
+    extremes are exact: a rim is p(t) = c + A cos t + B sin t, so an image coordinate
+    u(t) = (a0 + a1 cos t + a2 sin t) / (c0 + c1 cos t + c2 sin t) (the numerator that row of
+    P2 p(t), the denominator its last), and du/dt = 0 is linear in (cos t, sin t):
+
+        (a2 c0 - a0 c2) cos t + (a0 c1 - a1 c0) sin t + (a2 c1 - a1 c2) = 0,
+
+    two angles, the rim's two extremes of u; the cylinder's are those of its two rims."""
+    box3d = _boxes(box3d)
+    P2 = np.asarray(P2, dtype=float)
+    h, w, l, x, y, z, ry = box3d.T
+    c, s = np.cos(ry), np.sin(ry)
+    along = np.stack([c, np.zeros_like(c), -s], axis=-1) * (l / 2)[:, None]  # (N, 3)
+    across = np.stack([s, np.zeros_like(s), c], axis=-1) * (w / 2)[:, None]
+    qa, qb = along @ P2[:, :3].T, across @ P2[:, :3].T  # (N, 3): cos t and sin t terms
+    low, high = np.full((len(box3d), 2), np.inf), np.full((len(box3d), 2), -np.inf)
+    for lift in (0.0, 1.0):  # the bottom rim, then the top
+        centre = np.stack([x, y - lift * h, z], axis=-1)
+        q0 = centre @ P2[:, :3].T + P2[:, 3]
+        for k in (0, 1):  # u, then v
+            a0, a1, a2 = q0[:, k], qa[:, k], qb[:, k]
+            c0, c1, c2 = q0[:, 2], qa[:, 2], qb[:, 2]
+            alpha, beta, gamma = a2 * c0 - a0 * c2, a0 * c1 - a1 * c0, a2 * c1 - a1 * c2
+            radius = np.hypot(alpha, beta)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                spread = np.arccos(np.clip(-gamma / radius, -1.0, 1.0))
+                for t in (np.arctan2(beta, alpha) + spread, np.arctan2(beta, alpha) - spread):
+                    ct, st = np.cos(t), np.sin(t)
+                    value = (a0 + a1 * ct + a2 * st) / (c0 + c1 * ct + c2 * st)
+                    low[:, k] = np.minimum(low[:, k], value)
+                    high[:, k] = np.maximum(high[:, k], value)
+    return np.concatenate([low, high], axis=1)
 
 
 # -- poses ----------------------------------------------------------------------------------------

@@ -340,6 +340,28 @@ def detection_scores(score: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-score))
 
 
+def _silhouettes(det, calibration, image_size) -> np.ndarray | None:
+    """(N, 4) per detection row the image box of its person (`ROUND_TYPES`) where the
+    detector's own 2D box is only its 3D box's corners projected (within 2 px a side, as
+    PointRCNN writes it, clipped to [0, W - 1] x [0, H - 1]): that box says nothing the 3D box
+    does not, and draws the corners a person does not fill. NaN elsewhere: a 2D box of the
+    detector's own (one found in the image) is kept. None without a calibration."""
+    from occtrack.io.kitti import ROUND_TYPES
+    from occtrack.io.kitti_geometry import project_boxes
+
+    if calibration is None or image_size is None:
+        return None
+    out = np.full((len(det), 4), np.nan)
+    people = np.flatnonzero(np.isin(det.type, ROUND_TYPES))
+    if not len(people):
+        return out
+    corners = project_boxes(det.box3d[people], calibration.P2, image_size)
+    own = np.abs(corners - det.box[people]).max(axis=1) < 2.0
+    out[people[own]] = project_boxes(det.box3d[people[own]], calibration.P2, image_size,
+                                     round_=np.ones(int(own.sum()), bool))
+    return out
+
+
 def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
                 poses: np.ndarray | None = None, calibration=None,
                 image_size: tuple[float, float] | None = None, quiet: bool = True,
@@ -347,7 +369,9 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
     0..num_frames-1, every class at once, each object keeping its own) and return the result
     as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
-    detection's own while detected, else the 3D box projected with the calibration's P2. A
+    detection's own while detected, else the 3D box projected with the calibration's P2 (a
+    person's: the cylinder inscribed in it, also in place of a detected person's 2D box that is
+    only its 3D box's corners projected, `_silhouettes`). A
     coasting box that the image's border cuts, or that projects nowhere in the image, is left
     out of the file: the camera sees no part of it beyond the border, so its clipped
     projection is not the box a camera would show (KITTI labels such an object truncated and
@@ -356,7 +380,7 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     line on the boxes dropped as duplicates of another box (`GroundTracker`). `written`: the
     types whose tracks are written (None: every type); every type is tracked, as a box of
     another type can hide one of these or be the one it duplicates."""
-    from occtrack.io.kitti import KittiTable
+    from occtrack.io.kitti import ROUND_TYPES, KittiTable
     from occtrack.io.kitti_geometry import project_boxes
     from occtrack.progress import progress
 
@@ -368,6 +392,7 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
                             "a 3D detector's boxes (h w l x y z rotation_y)", det.path, line)
     tracker = GroundTracker(config)
     scores = detection_scores(det.score)
+    silhouette = _silhouettes(det, calibration, image_size)
     order = np.argsort(det.frame, kind="stable")
     bounds = np.searchsorted(det.frame[order], np.arange(num_frames + 1))
     rows: dict[str, list] = {k: [] for k in ("frame", "id", "type", "box", "box3d", "score")}
@@ -378,8 +403,12 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
         box = np.full((len(tracks), 4), np.nan)
         took = tracks.detection_index >= 0
         box[took] = det.box[sel[tracks.detection_index[took]]]
+        if silhouette is not None:
+            own = silhouette[sel[tracks.detection_index[took]]]
+            box[took] = np.where(np.isfinite(own), own, box[took])
         if calibration is not None and image_size is not None and (~took).any():
-            projected = project_boxes(tracks.boxes3d[~took], calibration.P2, image_size)
+            projected = project_boxes(tracks.boxes3d[~took], calibration.P2, image_size,
+                                      round_=np.isin(tracks.classes[~took], ROUND_TYPES))
             width, height = image_size
             cut = ((projected[:, 0] <= 0) | (projected[:, 1] <= 0) | (projected[:, 2] >= width)
                    | (projected[:, 3] >= height))
