@@ -49,6 +49,14 @@ learnt online from the filter's own association marginals
 logistic scores crowd above .9, all in one of the filter's probability bins), one learner for
 every class (one a class was measured worse on KITTI's walkers, whose few true detections
 cannot outweigh the false tracks' in their own). docs/kitti-3d.md has the scores.
+
+What a track follows can change: a track that followed a car can go on along a hedge when the
+car leaves, and a far car's first low scores say little once it has come near. So "real" is
+not fixed for life but a two-state Markov chain that flips either way at the rate
+1 / `EVIDENCE_MEMORY` (`forget_evidence`): between frames the probability relaxes towards
+even odds, P - 1/2 shrinking by exp(-2 dt / EVIDENCE_MEMORY), then the frame's score weighs in
+(the forward recursion of that hidden Markov model). Evidence older than the memory counts
+little, and a run of good scores lifts a track that began badly within a few frames.
 """
 
 from __future__ import annotations
@@ -79,6 +87,19 @@ lidar's 10 Hz; a hidden object keeps its velocity); `ground_config` applies them
 SHAPE_MEMORY = 10.0
 """s: how long an object's last detected shape is kept after it was last reported."""
 BOX3D_COLUMNS = "h w l x y z rotation_y"
+EVIDENCE_MEMORY = SHAPE_MEMORY
+"""s: an object's evidence that it is real flips at the rate 1 / EVIDENCE_MEMORY (see the
+module): the tracker remembers what an object is for as long as it keeps its shape."""
+
+
+def forget_evidence(log_odds: float, elapsed: float, memory: float = EVIDENCE_MEMORY) -> float:
+    """The log-odds that an object is real after `elapsed` seconds of a two-state chain that
+    flips either way at the rate 1 / memory: P - 1/2 = tanh(log_odds / 2) / 2 shrinks by
+    exp(-2 elapsed / memory) (stable where P rounds to 1)."""
+    keep = math.exp(-2.0 * max(elapsed, 0.0) / memory)
+    if keep >= 1.0:
+        return log_odds
+    return 2.0 * math.atanh(math.tanh(log_odds / 2.0) * keep)
 
 
 @dataclass(frozen=True)
@@ -275,8 +296,8 @@ class GroundTracker:
                 scores[tracks.detection_index[took]])
         odds = np.empty(n)
         for i in range(n):
-            entry = self._evidence.setdefault(int(tracks.ids[i]), [0.0, 0.0])
-            entry[0] += llr[i]
+            entry = self._evidence.setdefault(int(tracks.ids[i]), [0.0, self._time])
+            entry[0] = forget_evidence(entry[0], self._time - entry[1]) + llr[i]
             entry[1] = self._time
             odds[i] = entry[0]
         confidence = tracks.confidence / (1.0 + np.exp(-odds))
