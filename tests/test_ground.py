@@ -445,7 +445,7 @@ def test_what_the_ground_tracker_remembers_is_bounded_by_the_scene():
         car = (-15.0 + 10.0 * t, 20.0)
         tracks = tracker.update(in_camera(car, np.eye(3, 4))[None], [0.95])
         seen.update(tracks.ids.tolist())
-        most = max(most, len(tracker._shape), len(tracker._evidence))
+        most = max(most, len(tracker._shape), len(tracker._evidence), len(tracker._size))
     assert len(seen) >= 75
     assert most <= SHAPE_MEMORY / 3.0 + 2
 
@@ -543,3 +543,57 @@ def test_a_walker_is_drawn_as_the_cylinder_in_its_box_unless_its_2d_box_is_its_o
             np.testing.assert_allclose(box, cylinder, atol=0.006)  # (2 decimals)
             corners = project_boxes(box3d[None], p2, (1242, 375))[0]
             assert box[2] - box[0] < 0.9 * (corners[2] - corners[0])  # turned 0.8 rad
+
+
+def test_an_objects_size_is_its_detections_mean_weighted_by_one_over_range_squared():
+    """Sizes read at 10 m and 40 m weigh 16 to 1 (a lidar's points fall off as 1 / r^2); a box
+    nearer than SIZE_NEAR weighs as if it were that far; each object keeps its own sums."""
+    from occtrack.tracker.ground import SIZE_NEAR
+
+    tracker = GroundTracker()
+    near = np.array([[1.5, 1.6, 4.0, 6.0, 1.6, 8.0, 0.0]])  # range 10 m
+    far = np.array([[1.7, 2.0, 4.8, 0.0, 1.6, 40.0, 0.0]])
+    tracker._add_sizes(np.array([7]), near)
+    np.testing.assert_allclose(tracker.mean_sizes(np.array([7])), near[:, :3])
+    tracker._add_sizes(np.array([7]), far)
+    both = tracker.mean_sizes(np.array([7]))
+    np.testing.assert_allclose(both, (16 * near[:, :3] + far[:, :3]) / 17, rtol=1e-12)
+    close = np.array([[1.6, 1.8, 4.4, 0.0, 1.6, 1.0, 0.0]])  # 1 m: weighs as SIZE_NEAR
+    tracker._add_sizes(np.array([8, 7]), np.concatenate([close, close]))
+    again = tracker.mean_sizes(np.array([8, 7]))
+    np.testing.assert_allclose(again[0], close[0, :3])
+    w = np.array([1 / 100, 1 / 1600, 1 / SIZE_NEAR**2])
+    np.testing.assert_allclose(again[1], (w[0] * near[0, :3] + w[1] * far[0, :3]
+                                          + w[2] * close[0, :3]) / w.sum(), rtol=1e-12)
+
+
+def test_a_car_whose_2d_box_is_its_3d_box_projected_is_drawn_at_its_mean_size(tmp_path):
+    """A parked car whose detected length alternates 3.6 / 4.4 m at one range: the 3D box
+    written has the running mean length, and where the detector's 2D box is only its 3D box's
+    corners projected (as PointRCNN's is) the written 2D box is the written 3D box's
+    projection; the 2D box a detector found in the image is kept."""
+    from occtrack.io.kitti_geometry import project_boxes
+
+    p2 = np.array([[721.5, 0, 609.6, 44.9], [0, 721.5, 172.9, 0.2], [0, 0, 1, 0.003]])
+    rows, lengths = [], []
+    for f in range(8):
+        length = 3.6 if f % 2 == 0 else 4.4
+        lengths.append(length)
+        car = np.array([1.5, 1.7, length, -3.0, 1.6, 15.0, 0.5])
+        drawn = project_boxes(car[None], p2, (1241, 374))[0]
+        other = car + [0, 0, 0, 7.0, 0, 0, 0]
+        rows += [f"{f} -1 Car -1 -1 0 {' '.join(f'{v:.4f}' for v in drawn)} "
+                 f"{' '.join(f'{v:.4f}' for v in car)} 4.0",
+                 f"{f} -1 Car -1 -1 0 700 150 800 220 {' '.join(f'{v:.4f}' for v in other)} 4.0"]
+    det = _layout(tmp_path, rows, 8)
+    out = tmp_path / "out.txt"
+    assert main(["track", str(det), "-o", str(out), "--3d", "--quiet"]) == 0
+    result = read_kitti(out)
+    assert len(np.unique(result.id)) == 2 and set(result.frame.tolist()) == set(range(8))
+    for frame, box, box3d in zip(result.frame, result.box, result.box3d, strict=True):
+        if box3d[3] > 0:
+            np.testing.assert_allclose(box, [700, 150, 800, 220])
+            continue
+        assert box3d[2] == pytest.approx(np.mean(lengths[:frame + 1]), abs=0.01)
+        np.testing.assert_allclose(box, project_boxes(box3d[None], p2, (1242, 375))[0],
+                                   atol=0.02)

@@ -15,9 +15,11 @@ ground axis (world x, world z) the centre, velocity and half-size of the box's f
 axis-aligned hull of its four ground corners in the world's axes (a car that turns keeps its
 hull nearly, and the world's axes do not turn with the sensor). Metres and seconds, counted
 in decimetres inside the filter (`UNIT`); the noises, in units of a box's size, serve any
-sensor (`occtrack.models.box`). Height, elevation and heading are carried from the object's
-last detection: an object that took a detection reports that detection's box, a coasting one
-its last detection's shape and heading at the filter's centre.
+sensor (`occtrack.models.box`). Elevation and heading are carried from the object's last
+detection, its size (h, w, l) is the mean of its detections' sizes, each weighted by
+1 / range^2 (a solid object keeps its size; a lidar's points on it fall off as 1 / r^2): an
+object that took a detection reports that detection's centre and heading at its mean size, a
+coasting one its last detection's heading at the filter's centre.
 
 The sensor's motion. The filter's frame is the square of +-`reach` metres around the sensor,
 re-centred on it every frame: the sensor's travel enters the prediction as the camera's shift
@@ -86,6 +88,9 @@ GROUND_DEFAULTS = {"fps": 10.0, "coast_velocity_time": math.inf}
 lidar's 10 Hz; a hidden object keeps its velocity); `ground_config` applies them."""
 SHAPE_MEMORY = 10.0
 """s: how long an object's last detected shape is kept after it was last reported."""
+SIZE_NEAR = 5.0
+"""m: nearer than this an object's size is weighed as if it were this far (`_add_sizes`): a
+car that near fills much of the sensor's view, and its points no longer grow as 1 / r^2."""
 BOX3D_COLUMNS = "h w l x y z rotation_y"
 EVIDENCE_MEMORY = SHAPE_MEMORY
 """s: an object's evidence that it is real flips at the rate 1 / EVIDENCE_MEMORY (see the
@@ -236,6 +241,7 @@ class GroundTracker:
         self._steps = 0
         self.duplicates_dropped = 0  # boxes dropped as another box's duplicate, so far
         self._shape: dict[int, np.ndarray] = {}  # id -> h, w, l, world y, world yaw, time
+        self._size: dict[int, np.ndarray] = {}  # id -> sum of w h, w w, w l, and of w
         c = self.config  # the score densities the evidence reads (see the module)
         self._evidence_scores = ScoreLearner(c.score_floor, c.clutter_score_power,
                                              log_odds=True)
@@ -271,6 +277,8 @@ class GroundTracker:
         index = tracks.detection_index.copy()  # (of the kept boxes: of the given ones)
         index[index >= 0] = kept[index[index >= 0]]
         tracks = replace(tracks, detection_index=index)
+        took = index >= 0  # (every object the filter holds, reported or not)
+        self._add_sizes(tracks.ids[took], boxes[index[took]])
         self._origin = origin
         if timestamp is not None:
             self._time = check_time(timestamp, "timestamp")
@@ -311,6 +319,7 @@ class GroundTracker:
         out = np.zeros((n, 7))
         took = tracks.detection_index >= 0
         out[took] = boxes[tracks.detection_index[took]]
+        out[took, :3] = self.mean_sizes(tracks.ids[took])
         if took.any():  # remember each detected object's shape, elevation and heading
             world_y = (boxes[tracks.detection_index[took], 3:6] @ R.T + t)[:, 1]
             world_yaw = heading_of(heading_vector(out[took, 6]) @ R.T)
@@ -333,6 +342,23 @@ class GroundTracker:
         return GroundTracks(tracks.ids, out, tracks.existence, tracks.confidence, velocities,
                             tracks.detection_index, tracks.classes, tracks.occluded)
 
+    def _add_sizes(self, ids: np.ndarray, boxes: np.ndarray) -> None:
+        """Count the sizes (h, w, l) of the (n, 7) `boxes` that objects `ids` (n,) took into
+        their means (`mean_sizes`), each weighted by 1 / r^2 (r the box's range, `SIZE_NEAR`
+        at least): a solid object keeps its size, and a lidar's points on it, whose spread
+        sets the variance of a size read from them, fall off as 1 / r^2."""
+        weight = 1.0 / np.maximum(np.hypot(boxes[:, 3], boxes[:, 5]), SIZE_NEAR) ** 2
+        for k, key in enumerate(ids.tolist()):
+            total = self._size.setdefault(int(key), np.zeros(4))
+            total[:3] += weight[k] * boxes[k, :3]
+            total[3] += weight[k]
+
+    def mean_sizes(self, ids: np.ndarray) -> np.ndarray:
+        """(n, 3) the size (h, w, l) of each object of `ids` that has taken a detection: the
+        weighted mean of its detections' sizes (`_add_sizes`)."""
+        return np.array([self._size[int(key)][:3] / self._size[int(key)][3]
+                         for key in ids.tolist()]).reshape(-1, 3)
+
     def _fallback(self, ltwh: np.ndarray, t: np.ndarray) -> np.ndarray:
         """The shape of an object reported before any detection of its was (its footprint,
         1.5 m tall, standing on the ground 1.65 m below the camera, KITTI's mounting)."""
@@ -347,6 +373,8 @@ class GroundTracker:
             del self._shape[key]
         for key in [k for k, e in self._evidence.items() if self._time - e[1] > SHAPE_MEMORY]:
             del self._evidence[key]
+        for key in [k for k in self._size if k not in self._shape]:
+            del self._size[key]
 
 
 
@@ -361,26 +389,19 @@ def detection_scores(score: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-score))
 
 
-def _silhouettes(det, calibration, image_size) -> np.ndarray | None:
-    """(N, 4) per detection row the image box of its person (`ROUND_TYPES`) where the
-    detector's own 2D box is only its 3D box's corners projected (within 2 px a side, as
-    PointRCNN writes it, clipped to [0, W - 1] x [0, H - 1]): that box says nothing the 3D box
-    does not, and draws the corners a person does not fill. NaN elsewhere: a 2D box of the
-    detector's own (one found in the image) is kept. None without a calibration."""
-    from occtrack.io.kitti import ROUND_TYPES
+def _drawn_from_3d(det, calibration, image_size) -> np.ndarray | None:
+    """(N,) bool: the detection rows whose 2D box is only their 3D box's corners projected
+    (within 2 px a side; PointRCNN writes them so, clipped to [0, W - 1] x [0, H - 1]). Such a
+    box says nothing the 3D box does not: the tracker's own 3D box, drawn as its kind fills it,
+    takes its place (`track_kitti`). A 2D box found in the image by the detector is its own.
+    None without a calibration."""
     from occtrack.io.kitti_geometry import project_boxes
 
     if calibration is None or image_size is None:
         return None
-    out = np.full((len(det), 4), np.nan)
-    people = np.flatnonzero(np.isin(det.type, ROUND_TYPES))
-    if not len(people):
-        return out
-    corners = project_boxes(det.box3d[people], calibration.P2, image_size)
-    own = np.abs(corners - det.box[people]).max(axis=1) < 2.0
-    out[people[own]] = project_boxes(det.box3d[people[own]], calibration.P2, image_size,
-                                     round_=np.ones(int(own.sum()), bool))
-    return out
+    corners = project_boxes(det.box3d, calibration.P2, image_size)
+    with np.errstate(invalid="ignore"):
+        return np.abs(corners - det.box).max(axis=1) < 2.0
 
 
 def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
@@ -390,10 +411,12 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
     0..num_frames-1, every class at once, each object keeping its own) and return the result
     as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
-    detection's own while detected, else the 3D box projected with the calibration's P2 (a
-    person's: the cylinder inscribed in it, also in place of a detected person's 2D box that is
-    only its 3D box's corners projected, `_silhouettes`). A
-    coasting box that the image's border cuts, or that projects nowhere in the image, is left
+    detection's own while detected, else the 3D box projected with the calibration's P2. A
+    3D box is drawn as its kind fills it (a person: the upright cylinder inscribed in it,
+    `ROUND_TYPES`; anything else: its corners), and a detection's 2D box that is only its 3D
+    box's corners projected (`_drawn_from_3d`, PointRCNN's) is drawn so from the tracker's 3D
+    box (the detection's centre and heading, the object's mean size). A coasting box that the
+    image's border cuts, or that projects nowhere in the image, is left
     out of the file: the camera sees no part of it beyond the border, so its clipped
     projection is not the box a camera would show (KITTI labels such an object truncated and
     does not score it). `poses` (F, 3, 4) the camera's path;
@@ -413,7 +436,7 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
                             "a 3D detector's boxes (h w l x y z rotation_y)", det.path, line)
     tracker = GroundTracker(config)
     scores = detection_scores(det.score)
-    silhouette = _silhouettes(det, calibration, image_size)
+    drawn = _drawn_from_3d(det, calibration, image_size)
     order = np.argsort(det.frame, kind="stable")
     bounds = np.searchsorted(det.frame[order], np.arange(num_frames + 1))
     rows: dict[str, list] = {k: [] for k in ("frame", "id", "type", "box", "box3d", "score")}
@@ -424,9 +447,12 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
         box = np.full((len(tracks), 4), np.nan)
         took = tracks.detection_index >= 0
         box[took] = det.box[sel[tracks.detection_index[took]]]
-        if silhouette is not None:
-            own = silhouette[sel[tracks.detection_index[took]]]
-            box[took] = np.where(np.isfinite(own), own, box[took])
+        if drawn is not None and took.any():
+            redraw = np.flatnonzero(took)[drawn[sel[tracks.detection_index[took]]]]
+            mine = project_boxes(tracks.boxes3d[redraw], calibration.P2, image_size,
+                                 round_=np.isin(tracks.classes[redraw], ROUND_TYPES))
+            found = np.isfinite(mine).all(axis=1)
+            box[redraw[found]] = mine[found]
         if calibration is not None and image_size is not None and (~took).any():
             projected = project_boxes(tracks.boxes3d[~took], calibration.P2, image_size,
                                       round_=np.isin(tracks.classes[~took], ROUND_TYPES))
