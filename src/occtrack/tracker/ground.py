@@ -27,7 +27,12 @@ does in the image (an exact translation of every component), so the survival reg
 the sensor wherever it drives.
 
 Occlusion is the sensor's view (`occtrack.occlusion.sensor_view`): nearer boxes hide the
-angles behind them, under the model `config.occlusion` names. A vehicle or a walker hidden
+angles behind them, under the model `config.occlusion` names. What a miss says depends on
+where the object is: a lidar detector finds nearly every car it can see within 40 m and
+fewer beyond, so the filter's stationary P_D is a profile by class and range octave, learnt
+from the tracker's own objects that could be seen (`occtrack.models.detection_profile`, each
+object weighted by the probability that it is real), and an object missed where the
+detector does not miss goes sooner. A vehicle or a walker hidden
 from the sensor goes on moving: the ground's defaults (`GROUND_DEFAULTS`) keep a coasting
 object's velocity (`coast_velocity_time` infinite), where the image boxes' let it fade in
 0.1 s.
@@ -70,6 +75,7 @@ import numpy as np
 import numpy.typing as npt
 
 from occtrack.config import TrackerConfig
+from occtrack.models.detection_profile import DetectionProfile
 from occtrack.models.footprints import DUPLICATE_OVERLAP, duplicates, footprints
 from occtrack.models.score_model import ScoreLearner
 from occtrack.occlusion.sensor_view import SensorViewGeometry, sensor_view_occlusion
@@ -235,7 +241,11 @@ class GroundTracker:
 
     def reset(self) -> None:
         """Forget every object and start again."""
-        self.tracker = Tracker(self.config, self.occlusion)
+        # the filter reports every object it holds, confident or not (each one's hits and
+        # misses teach the detection profile); the floor is applied here (`_weigh_scores`)
+        self.tracker = Tracker(replace(self.config, report_min_confidence=0.0), self.occlusion)
+        self.detection_profile = DetectionProfile(self.config.stationary_detectability)
+        self.tracker.filter.detection_profile = self._profile_of_components
         self._origin: np.ndarray | None = None  # world (x, z) of the filter frame's corner
         self._time = 0.0  # s since the first frame
         self._steps = 0
@@ -287,6 +297,8 @@ class GroundTracker:
         self._steps += 1
         if self.score_evidence:
             tracks = self._weigh_scores(tracks, given, kept)
+        elif self.config.report_min_confidence > 0:
+            tracks = tracks.select(tracks.confidence >= self.config.report_min_confidence)
         return self._report(tracks, boxes, R, t, origin)
 
     def _weigh_scores(self, tracks, scores: np.ndarray, kept: np.ndarray):
@@ -309,9 +321,25 @@ class GroundTracker:
             entry[1] = self._time
             odds[i] = entry[0]
         confidence = tracks.confidence / (1.0 + np.exp(-odds))
+        seen = took | ~tracks.occluded  # (a miss put down to occlusion says nothing of P_D)
+        self.detection_profile.update(tracks.classes[seen], self._ranges(tracks.boxes[seen]),
+                                      took[seen], 1.0 / (1.0 + np.exp(-odds[seen])),
+                                      self.tracker.filter.dt)
         tracks = replace(tracks, confidence=confidence)
         floor = self.config.report_min_confidence
         return tracks.select(confidence >= floor) if floor > 0 else tracks
+
+    def _ranges(self, ltwh: np.ndarray) -> np.ndarray:
+        """(n,) m from the sensor to the centres of boxes (n, 4) in the filter's frame."""
+        centre = ltwh[:, :2] + ltwh[:, 2:] / 2 - self.geometry.sensor
+        return np.hypot(centre[:, 0], centre[:, 1]) * UNIT
+
+    def _profile_of_components(self, means: np.ndarray, classes: np.ndarray) -> np.ndarray:
+        """The filter's hook: each component's stationary P_D from the learnt profile (the
+        Poisson part's, class -1, the configured one)."""
+        centre = means[:, :, 0] - self.geometry.sensor
+        return self.detection_profile.probability(classes, np.hypot(centre[:, 0],
+                                                                    centre[:, 1]) * UNIT)
 
     def _report(self, tracks, boxes: np.ndarray, R: np.ndarray, t: np.ndarray,
                 origin: np.ndarray) -> GroundTracks:

@@ -190,6 +190,10 @@ class GaussianMixturePMB:
         self.measurement = measurement
         self.birth_model = births  # None: the box births (edges of the image, learnt sizes)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
+        # optional (means, classes) -> (n,) stationary P_D per component (a class of -1: the
+        # Poisson part's), towards which each d_k relaxes in place of the one configured
+        # value (`occtrack.models.detection_profile`, set by `tracker.ground`)
+        self.detection_profile = None
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
         self._dt_models: dict[float, tuple] = {}
         # the half-size process noise the prediction uses (h / sqrt(s)): the config's, or what
@@ -383,6 +387,13 @@ class GaussianMixturePMB:
                       self.detectability.stationary, self._memories[0],
                       self.occludability.stationary, self._memories[1], self.image_size,
                       self.survival_inside, self.config.exit_survival)
+        if self.detection_profile is not None:  # a stationary P_D per component
+            label = self.label[:n]
+            classes = np.where(label >= 0, self.slot_class[np.maximum(label, 0)], -1)
+            stationary = self.detection_profile(self.mean[:n], classes)
+            # (the kernel relaxed d towards the one stationary s; towards s_k instead:)
+            self.det[:n] = np.clip(self.det[:n] + (1.0 - self._memories[0])
+                                   * (stationary - self.detectability.stationary), 0.0, 1.0)
         in_view = getattr(self.measurement, "in_view", None)
         if in_view is not None:  # (optional: a sensor whose view is not the whole region)
             self._leave_view(in_view)
