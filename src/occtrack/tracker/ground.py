@@ -242,7 +242,7 @@ class GroundTracker:
     def reset(self) -> None:
         """Forget every object and start again."""
         # the filter reports every object it holds, confident or not (each one's hits and
-        # misses teach the detection profile); the floor is applied here (`_weigh_scores`)
+        # misses teach the detection profile); the floor is applied here (`update`)
         self.tracker = Tracker(replace(self.config, report_min_confidence=0.0), self.occlusion)
         self.detection_profile = DetectionProfile(self.config.stationary_detectability)
         self.tracker.filter.detection_profile = self._profile_of_components
@@ -251,7 +251,7 @@ class GroundTracker:
         self._steps = 0
         self.duplicates_dropped = 0  # boxes dropped as another box's duplicate, so far
         self._shape: dict[int, np.ndarray] = {}  # id -> h, w, l, world y, world yaw, time
-        self._size: dict[int, np.ndarray] = {}  # id -> sum of w h, w w, w l, and of w
+        self._size: dict[int, np.ndarray] = {}  # id -> sum of w h, w w, w l, of w; time
         c = self.config  # the score densities the evidence reads (see the module)
         self._evidence_scores = ScoreLearner(c.score_floor, c.clutter_score_power,
                                              log_odds=True)
@@ -287,25 +287,29 @@ class GroundTracker:
         index = tracks.detection_index.copy()  # (of the kept boxes: of the given ones)
         index[index >= 0] = kept[index[index >= 0]]
         tracks = replace(tracks, detection_index=index)
-        took = index >= 0  # (every object the filter holds, reported or not)
-        self._add_sizes(tracks.ids[took], boxes[index[took]])
         self._origin = origin
         if timestamp is not None:
             self._time = check_time(timestamp, "timestamp")
         else:
             self._time += self.tracker.filter.dt if self._steps else 0.0
         self._steps += 1
-        if self.score_evidence:
-            tracks = self._weigh_scores(tracks, given, kept)
-        elif self.config.report_min_confidence > 0:
-            tracks = tracks.select(tracks.confidence >= self.config.report_min_confidence)
+        took = index >= 0  # (every object the filter holds, reported or not)
+        self._add_sizes(tracks.ids[took], boxes[index[took]])
+        real = (self._real_probability(tracks, given, kept) if self.score_evidence
+                else np.ones(len(tracks)))
+        seen = took | ~tracks.occluded  # (a miss put down to occlusion says nothing of P_D)
+        self.detection_profile.update(tracks.classes[seen], self._ranges(tracks.boxes[seen]),
+                                      took[seen], real[seen], self.tracker.filter.dt)
+        tracks = replace(tracks, confidence=tracks.confidence * real)
+        floor = self.config.report_min_confidence
+        if floor > 0:
+            tracks = tracks.select(tracks.confidence >= floor)
         return self._report(tracks, boxes, R, t, origin)
 
-    def _weigh_scores(self, tracks, scores: np.ndarray, kept: np.ndarray):
-        """The reported tracks with each confidence times the probability that the object is
-        real given the scores of every detection it took (see the module); those left under
-        `report_min_confidence` are not reported. `scores` are the given boxes', `kept` the
-        rows the filter saw (the others were duplicates)."""
+    def _real_probability(self, tracks, scores: np.ndarray, kept: np.ndarray) -> np.ndarray:
+        """(n,) the probability that each object is real given the scores of the detections
+        it took (see the module): the filter's confidence is multiplied by it. `scores` are
+        the given boxes', `kept` the rows the filter saw (the others were duplicates)."""
         n = len(tracks)
         llr = np.zeros(n)
         took = tracks.detection_index >= 0
@@ -320,14 +324,7 @@ class GroundTracker:
             entry[0] = forget_evidence(entry[0], self._time - entry[1]) + llr[i]
             entry[1] = self._time
             odds[i] = entry[0]
-        confidence = tracks.confidence / (1.0 + np.exp(-odds))
-        seen = took | ~tracks.occluded  # (a miss put down to occlusion says nothing of P_D)
-        self.detection_profile.update(tracks.classes[seen], self._ranges(tracks.boxes[seen]),
-                                      took[seen], 1.0 / (1.0 + np.exp(-odds[seen])),
-                                      self.tracker.filter.dt)
-        tracks = replace(tracks, confidence=confidence)
-        floor = self.config.report_min_confidence
-        return tracks.select(confidence >= floor) if floor > 0 else tracks
+        return 1.0 / (1.0 + np.exp(-odds))
 
     def _ranges(self, ltwh: np.ndarray) -> np.ndarray:
         """(n,) m from the sensor to the centres of boxes (n, 4) in the filter's frame."""
@@ -377,9 +374,10 @@ class GroundTracker:
         sets the variance of a size read from them, fall off as 1 / r^2."""
         weight = 1.0 / np.maximum(np.hypot(boxes[:, 3], boxes[:, 5]), SIZE_NEAR) ** 2
         for k, key in enumerate(ids.tolist()):
-            total = self._size.setdefault(int(key), np.zeros(4))
+            total = self._size.setdefault(int(key), np.zeros(5))
             total[:3] += weight[k] * boxes[k, :3]
             total[3] += weight[k]
+            total[4] = self._time
 
     def mean_sizes(self, ids: np.ndarray) -> np.ndarray:
         """(n, 3) the size (h, w, l) of each object of `ids` that has taken a detection: the
@@ -401,7 +399,7 @@ class GroundTracker:
             del self._shape[key]
         for key in [k for k, e in self._evidence.items() if self._time - e[1] > SHAPE_MEMORY]:
             del self._evidence[key]
-        for key in [k for k in self._size if k not in self._shape]:
+        for key in [k for k, e in self._size.items() if self._time - e[4] > SHAPE_MEMORY]:
             del self._size[key]
 
 
