@@ -233,6 +233,10 @@ def test_logits_become_probabilities_and_probabilities_stay():
 
 # -- occtrack track --3d -----------------------------------------------------------------------
 
+LAYOUT_P2 = np.array([[721.5, 0, 609.6, 44.9], [0, 721.5, 172.9, 0.2], [0, 0, 1, 0.003]])
+"""The P2 that `_layout` writes."""
+
+
 def _layout(tmp_path, rows, frames, calib=True, poses=None):
     for sub in ("det_02/pr", "label_02", "seqinfo", "calib", "poses"):
         (tmp_path / sub).mkdir(parents=True, exist_ok=True)
@@ -242,7 +246,7 @@ def _layout(tmp_path, rows, frames, calib=True, poses=None):
         f"[Sequence]\nname=0000\nframeRate=10\nseqLength={frames}\nimWidth=1242\n"
         f"imHeight=375\n")
     if calib:
-        p2 = "721.5 0 609.6 44.9 0 721.5 172.9 0.2 0 0 1 0.003"
+        p2 = " ".join(f"{v:g}" for v in LAYOUT_P2.ravel())
         (tmp_path / "calib" / "0000.txt").write_text(
             f"P0: {p2}\nP1: {p2}\nP2: {p2}\nP3: {p2}\nR0_rect: 1 0 0 0 1 0 0 0 1\n"
             f"Tr_velo_to_cam: 0 -1 0 0 0 0 -1 0 1 0 0 0\n"
@@ -507,6 +511,12 @@ def test_track_3d_classes_writes_the_picked_types_and_still_sees_the_others(tmp_
     np.testing.assert_allclose(result.box3d[:, 3], 4.0)  # the walker standing apart
 
 
+def _row(frame: int, kind: str, box2d, box3d, score: float = 4.0) -> str:
+    """One KITTI detection line: its 2D box x1 y1 x2 y2 and 3D box h w l x y z rotation_y."""
+    numbers = " ".join(f"{v:.4f}" for v in (*box2d, *box3d))
+    return f"{frame} -1 {kind} -1 -1 0 {numbers} {score}"
+
+
 def test_a_walker_is_drawn_as_the_cylinder_in_its_box_unless_its_2d_box_is_its_own(tmp_path):
     """A person fills the elliptic cylinder inscribed in the 3D box, not its corners: a
     walker whose 2D box is only its 3D box's corners projected (as PointRCNN writes it) is
@@ -514,18 +524,15 @@ def test_a_walker_is_drawn_as_the_cylinder_in_its_box_unless_its_2d_box_is_its_o
     keep theirs."""
     from occtrack.io.kitti_geometry import project_boxes, project_cylinders
 
-    p2 = np.array([[721.5, 0, 609.6, 44.9], [0, 721.5, 172.9, 0.2], [0, 0, 1, 0.003]])
+    p2 = LAYOUT_P2
     rows, own = [], [300.0, 120.0, 330.0, 220.0]
     for f in range(6):
         walker = np.array([1.7, 0.6, 0.8, -2.0, 1.6, 12.0 + 0.1 * f, 0.8])
         corners = project_boxes(walker[None], p2, (1241, 374))[0]
         other = walker + [0, 0, 0, -4.0, 0, 0, 0]
         car = np.array([1.5, 1.7, 4.0, 4.0, 1.6, 20.0 - 0.5 * f, 0.1])
-        rows += [f"{f} -1 Pedestrian -1 -1 0 {' '.join(f'{v:.4f}' for v in corners)} "
-                 f"{' '.join(f'{v:.4f}' for v in walker)} 4.0",
-                 f"{f} -1 Pedestrian -1 -1 0 {' '.join(map(str, own))} "
-                 f"{' '.join(f'{v:.4f}' for v in other)} 4.0",
-                 f"{f} -1 Car -1 -1 0 700 150 800 220 {' '.join(f'{v:.4f}' for v in car)} 4.0"]
+        rows += [_row(f, "Pedestrian", corners, walker), _row(f, "Pedestrian", own, other),
+                 _row(f, "Car", [700, 150, 800, 220], car)]
     det = _layout(tmp_path, rows, 6)
     out = tmp_path / "out.txt"
     assert main(["track", str(det), "-o", str(out), "--3d", "--quiet"]) == 0
@@ -574,7 +581,7 @@ def test_a_car_whose_2d_box_is_its_3d_box_projected_is_drawn_at_its_mean_size(tm
     projection; the 2D box a detector found in the image is kept."""
     from occtrack.io.kitti_geometry import project_boxes
 
-    p2 = np.array([[721.5, 0, 609.6, 44.9], [0, 721.5, 172.9, 0.2], [0, 0, 1, 0.003]])
+    p2 = LAYOUT_P2
     rows, lengths = [], []
     for f in range(8):
         length = 3.6 if f % 2 == 0 else 4.4
@@ -582,9 +589,7 @@ def test_a_car_whose_2d_box_is_its_3d_box_projected_is_drawn_at_its_mean_size(tm
         car = np.array([1.5, 1.7, length, -3.0, 1.6, 15.0, 0.5])
         drawn = project_boxes(car[None], p2, (1241, 374))[0]
         other = car + [0, 0, 0, 7.0, 0, 0, 0]
-        rows += [f"{f} -1 Car -1 -1 0 {' '.join(f'{v:.4f}' for v in drawn)} "
-                 f"{' '.join(f'{v:.4f}' for v in car)} 4.0",
-                 f"{f} -1 Car -1 -1 0 700 150 800 220 {' '.join(f'{v:.4f}' for v in other)} 4.0"]
+        rows += [_row(f, "Car", drawn, car), _row(f, "Car", [700, 150, 800, 220], other)]
     det = _layout(tmp_path, rows, 8)
     out = tmp_path / "out.txt"
     assert main(["track", str(det), "-o", str(out), "--3d", "--quiet"]) == 0

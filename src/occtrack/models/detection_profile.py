@@ -46,6 +46,7 @@ class DetectionProfile:
         self._trials: dict[int, np.ndarray] = {}
 
     def band_of(self, ranges: np.ndarray) -> np.ndarray:
+        """The band of each range (m): 0 below the first edge, an edge opening its band."""
         return np.searchsorted(self.edges, np.asarray(ranges, dtype=float), side="right")
 
     def update(self, classes: np.ndarray, ranges: np.ndarray, hit: np.ndarray,
