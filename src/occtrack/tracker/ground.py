@@ -298,8 +298,9 @@ class GroundTracker:
         real = (self._real_probability(tracks, given, kept) if self.score_evidence
                 else np.ones(len(tracks)))
         seen = took | ~tracks.occluded  # (a miss put down to occlusion says nothing of P_D)
-        self.detection_profile.update(tracks.classes[seen], self._ranges(tracks.boxes[seen]),
-                                      took[seen], real[seen], self.tracker.filter.dt)
+        centres = tracks.boxes[seen, :2] + tracks.boxes[seen, 2:] / 2
+        self.detection_profile.update(tracks.classes[seen], self._ranges(centres), took[seen],
+                                      real[seen], self.tracker.filter.dt)
         tracks = replace(tracks, confidence=tracks.confidence * real)
         floor = self.config.report_min_confidence
         if floor > 0:
@@ -326,17 +327,15 @@ class GroundTracker:
             odds[i] = entry[0]
         return 1.0 / (1.0 + np.exp(-odds))
 
-    def _ranges(self, ltwh: np.ndarray) -> np.ndarray:
-        """(n,) m from the sensor to the centres of boxes (n, 4) in the filter's frame."""
-        centre = ltwh[:, :2] + ltwh[:, 2:] / 2 - self.geometry.sensor
-        return np.hypot(centre[:, 0], centre[:, 1]) * UNIT
+    def _ranges(self, centres: np.ndarray) -> np.ndarray:
+        """(n,) m from the sensor to points (n, 2) in the filter's frame."""
+        offset = centres - self.geometry.sensor
+        return np.hypot(offset[:, 0], offset[:, 1]) * UNIT
 
     def _profile_of_components(self, means: np.ndarray, classes: np.ndarray) -> np.ndarray:
         """The filter's hook: each component's stationary P_D from the learnt profile (the
         Poisson part's, class -1, the configured one)."""
-        centre = means[:, :, 0] - self.geometry.sensor
-        return self.detection_profile.probability(classes, np.hypot(centre[:, 0],
-                                                                    centre[:, 1]) * UNIT)
+        return self.detection_profile.probability(classes, self._ranges(means[:, :, 0]))
 
     def _report(self, tracks, boxes: np.ndarray, R: np.ndarray, t: np.ndarray,
                 origin: np.ndarray) -> GroundTracks:
@@ -473,20 +472,18 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
         box = np.full((len(tracks), 4), np.nan)
         took = tracks.detection_index >= 0
         box[took] = det.box[sel[tracks.detection_index[took]]]
-        if drawn is not None and took.any():
-            redraw = np.flatnonzero(took)[drawn[sel[tracks.detection_index[took]]]]
-            mine = project_boxes(tracks.boxes3d[redraw], calibration.P2, image_size,
-                                 round_=np.isin(tracks.classes[redraw], ROUND_TYPES))
-            found = np.isfinite(mine).all(axis=1)
-            box[redraw[found]] = mine[found]
-        if calibration is not None and image_size is not None and (~took).any():
-            projected = project_boxes(tracks.boxes3d[~took], calibration.P2, image_size,
-                                      round_=np.isin(tracks.classes[~took], ROUND_TYPES))
+        if drawn is not None and len(tracks):  # (a calibration and an image size)
+            projected = project_boxes(tracks.boxes3d, calibration.P2, image_size,
+                                      round_=np.isin(tracks.classes, ROUND_TYPES))
+            redraw = took.copy()  # detected, its 2D box only its 3D box projected
+            redraw[took] = drawn[sel[tracks.detection_index[took]]]
+            redraw &= np.isfinite(projected).all(axis=1)
+            box[redraw] = projected[redraw]
             width, height = image_size
             cut = ((projected[:, 0] <= 0) | (projected[:, 1] <= 0) | (projected[:, 2] >= width)
                    | (projected[:, 3] >= height))
             projected[cut] = np.nan
-            box[~took] = projected
+            box[~took] = projected[~took]
         keep = np.isfinite(box).all(axis=1)
         if written is not None:
             keep &= np.isin(tracks.classes, written)
