@@ -20,12 +20,14 @@ from occtrack.occlusion.sensor_view import (
 )
 from occtrack.tracker.ground import (
     EVIDENCE_MEMORY,
+    SCORE_EVIDENCE_WEIGHT,
     GroundTracker,
     check_boxes3d,
     detection_scores,
     forget_evidence,
     ground_config,
     ground_corners,
+    lookahead_evidence,
 )
 
 
@@ -350,19 +352,100 @@ def test_a_track_of_clutter_like_scores_loses_its_confidence_and_a_real_one_keep
     plain = GroundTracker(ground_config({"occlusion": "none"}), score_evidence=False)
     boxes = np.array([in_camera((-5.0, 20.0), np.eye(3, 4)), in_camera((5.0, 20.0), np.eye(3, 4))])
     scores = np.array([0.15, 0.95])
-    for _ in range(8):
+    for _ in range(30):
         weighed = tracker.update(boxes, scores)
         alone = plain.update(boxes, scores)
     assert len(alone) == 2
     assert weighed.detection_index.tolist() == [1]
     ratio = weighed.confidence[0] / alone.confidence[alone.detection_index == 1][0]
-    # log 9 a frame against the forgetting (forget_evidence) settles where o = forget(o) +
-    # log 9, within 1e-4 after the frames reported here
+    # w log 9 a frame (w = SCORE_EVIDENCE_WEIGHT) against the forgetting (forget_evidence)
+    # settles where o = forget(o) + w log 9, within 1e-4 after the frames reported here
     settled = 0.0
     for _ in range(100):
-        settled = forget_evidence(settled, 0.1) + math.log(9)
+        settled = forget_evidence(settled, 0.1) + SCORE_EVIDENCE_WEIGHT * math.log(9)
     assert ratio == pytest.approx(1 / (1 + math.exp(-settled)), abs=1e-4)
-    assert ratio > 0.998
+    assert ratio > 0.99
+
+
+def _chain_posterior(odds0, llr, elapsed, memory):
+    """P(real at the first frame | its filtered odds and the later frames' ratios) by summing
+    over every path of the two-state chain (2^(k + 1) of them)."""
+    import itertools
+
+    total = {True: 0.0, False: 0.0}
+    for path in itertools.product((True, False), repeat=len(llr) + 1):
+        weight = 1 / (1 + math.exp(-odds0)) if path[0] else 1 / (1 + math.exp(odds0))
+        for k, (ratio, dt) in enumerate(zip(llr, elapsed, strict=True)):
+            keep = math.exp(-2 * dt / memory)
+            weight *= (1 + keep) / 2 if path[k] == path[k + 1] else (1 - keep) / 2
+            weight *= math.exp(ratio) if path[k + 1] else 1.0
+        total[path[0]] += weight
+    return total[True] / (total[True] + total[False])
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_lookahead_evidence_is_the_chains_backward_message_by_enumeration(seed):
+    """Filtered odds plus the backward message give P(real now | the later frames too),
+    summed over every path of the chain; with no forgetting the later ratios simply add."""
+    rng = np.random.default_rng(seed)
+    k = int(rng.integers(1, 6))
+    odds0, llr = rng.normal(0, 2), rng.normal(0, 2, k)
+    elapsed = rng.choice([0.1, 0.2, 1.5], k)
+    b = lookahead_evidence(llr, elapsed, memory=3.0)
+    assert 1 / (1 + math.exp(-odds0 - b)) == pytest.approx(
+        _chain_posterior(odds0, llr, elapsed, 3.0), rel=1e-12)
+    assert lookahead_evidence(llr, elapsed, memory=math.inf) == pytest.approx(llr.sum())
+    assert lookahead_evidence([], []) == 0.0
+
+
+def test_a_frame_looked_ahead_is_weighed_by_the_objects_later_scores():
+    """`_looked_ahead`: each object's confidence times P(real | later) / P(real | so far),
+    the later frames found by id (a frame that does not hold it is skipped, its time still
+    counted); an object no later frame holds keeps its filtered confidence."""
+    from occtrack.tracker.ground import GroundTracks, _looked_ahead
+
+    def frame(ids, confidence, evidence, llr):
+        n = len(ids)
+        return GroundTracks(np.array(ids), np.zeros((n, 7)), np.ones(n), np.array(confidence),
+                            np.zeros((n, 2)), np.zeros(n, int), np.zeros(n, int),
+                            np.zeros(n, bool), np.array(evidence), np.array(llr))
+
+    now = frame([4, 7], [0.3, 0.6], [-1.0, 2.0], [0.5, 0.5])
+    later = [(6, frame([4], [0.5], [0.2], [1.2])), (7, frame([4], [0.6], [0.9], [-0.4]))]
+    got = _looked_ahead(now, 5, later, dt=0.1)
+    smoothed = _chain_posterior(-1.0, [1.2, -0.4], [0.1, 0.1], EVIDENCE_MEMORY)
+    assert got[0] == pytest.approx(0.3 * smoothed * (1 + math.exp(1.0)), rel=1e-12)
+    assert got[1] == 0.6
+    gap = [(8, frame([4], [0.5], [0.2], [1.2]))]
+    assert _looked_ahead(now, 5, gap, dt=0.1)[0] == pytest.approx(
+        0.3 * _chain_posterior(-1.0, [1.2], [0.3], EVIDENCE_MEMORY) * (1 + math.exp(1.0)),
+        rel=1e-12)
+
+
+def test_track_kitti_without_lookahead_writes_the_online_trackers_reports(tmp_path):
+    """lookahead 0: each frame's rows are what `GroundTracker.update` reports then (the
+    floor applied to the filtered confidence); with the default lookahead the last frame,
+    which has no later frames, is the same."""
+    from occtrack.io.kitti_geometry import read_calib
+    from occtrack.tracker.ground import track_kitti
+
+    rows = _rows(14)
+    rows = [r.rsplit(" ", 1)[0] + f" {(-1.0, 0.5, 3.0)[i % 3]}" for i, r in enumerate(rows)]
+    det = read_kitti(_layout(tmp_path, rows, 14))
+    calibration = read_calib(tmp_path / "calib" / "0000.txt")
+    online = track_kitti(det, 14, None, None, calibration, (1242, 375), lookahead=0.0)
+    tracker = GroundTracker()
+    scores = detection_scores(det.score)
+    for f in range(14):
+        sel = det.frame == f
+        tracks = tracker.update(det.box3d[sel], scores[sel], det.type[sel])
+        np.testing.assert_array_equal(online.id[online.frame == f], tracks.ids)
+        np.testing.assert_array_equal(online.score[online.frame == f], tracks.confidence)
+    ahead = track_kitti(det, 14, None, None, calibration, (1242, 375))
+    assert len(ahead) and np.array_equal(ahead.score[ahead.frame == 13],
+                                         online.score[online.frame == 13])
+    with pytest.raises(ValueError, match="lookahead must be"):
+        track_kitti(det, 14, None, None, calibration, (1242, 375), lookahead=-1.0)
 
 
 def test_forgotten_evidence_relaxes_towards_even_odds_exactly():
@@ -409,7 +492,7 @@ def test_a_car_that_began_with_clutter_like_scores_is_lifted_by_good_ones():
         score = np.array([0.15 if k < 10 else 0.95])
         weighed, alone = tracker.update(box, score), plain.update(box, score)
         if len(alone):
-            odds = (forget_evidence(odds, 0.1) if seen else 0.0) + (
+            odds = (forget_evidence(odds, 0.1) if seen else 0.0) + SCORE_EVIDENCE_WEIGHT * (
                 -math.log(9) if k < 10 else math.log(9))
             seen = True
             ratios.append((weighed.confidence[0] / alone.confidence[0],
