@@ -320,7 +320,31 @@ def test_poses_without_3d_are_refused(tmp_path, capsys):
     det = _layout(tmp_path, _rows(3), 3)
     assert main(["track", str(det), "-o", str(tmp_path / "o.txt"), "--poses",
                  str(tmp_path / "poses" / "0000.txt")]) != 0
-    assert "--poses and --calib go with --3d" in _one_error(capsys)
+    assert "--poses, --calib and --lookahead go with --3d" in _one_error(capsys)
+
+
+def test_track_3d_lookahead_zero_writes_each_frames_filtered_confidence(tmp_path, capsys):
+    """`--lookahead 0` writes what `track_kitti(..., lookahead=0)` gives (the online
+    tracker's reports); a negative lookahead, or one without --3d, is one clear error."""
+    from occtrack.io.kitti_geometry import read_calib
+    from occtrack.tracker.ground import track_kitti
+
+    rows = [r.rsplit(" ", 1)[0] + f" {(-1.0, 0.5, 3.0)[i % 3]}" for i, r in enumerate(_rows(9))]
+    det = _layout(tmp_path, rows, 9)
+    out = tmp_path / "o.txt"
+    assert main(["track", str(det), "-o", str(out), "--3d", "--quiet", "--lookahead", "0"]) == 0
+    online = track_kitti(read_kitti(det), 9, None, None, read_calib(tmp_path / "calib" /
+                                                                    "0000.txt"), (1242, 375),
+                         lookahead=0.0)
+    written = read_kitti(out)
+    np.testing.assert_array_equal(written.frame, online.frame)
+    np.testing.assert_allclose(written.score, online.score, atol=5e-5)  # (4 decimals)
+    with pytest.raises(SystemExit) as exit_:
+        main(["track", str(det), "-o", str(out), "--3d", "--lookahead=-1"])
+    assert exit_.value.code == 2
+    assert "-1 must be a finite number of seconds, 0 or more" in capsys.readouterr().err
+    assert main(["track", str(det), "-o", str(out), "--force", "--lookahead", "0.2"]) != 0
+    assert "--poses, --calib and --lookahead go with --3d" in _one_error(capsys)
 
 
 # -- what an object's scores say ---------------------------------------------------------------

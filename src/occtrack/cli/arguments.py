@@ -8,12 +8,13 @@ from occtrack.config.arguments import (
     frame_rate,
     positive_float,
     positive_int,
+    seconds,
     seed_int,
     whole_number,
 )
 
 __all__ = ["DAY_AT_30_FPS", "add_engine_options", "frame_rate", "positive_float", "positive_int",
-           "seed_int", "whole_number"]
+           "seconds", "seed_int", "whole_number"]
 
 
 def add_engine_options(parser: argparse.ArgumentParser, sequential_help: str) -> None:

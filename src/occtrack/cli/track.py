@@ -8,7 +8,7 @@ import re
 import sys
 import time
 
-from occtrack.cli.arguments import frame_rate, positive_int, whole_number
+from occtrack.cli.arguments import frame_rate, positive_int, seconds, whole_number
 from occtrack.errors import OcctrackError
 
 OCCLUSION_NAMES = ("none", "object-wise", "measurement-wise")
@@ -149,6 +149,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--calib", metavar="FILE",
                         help="with --3d: KITTI calibration whose P2 projects coasting boxes "
                              "(default: DIR/calib/NNNN.txt beside a KITTI layout)")
+    parser.add_argument("--lookahead", type=seconds, metavar="SECONDS", default=None,
+                        help="with --3d: seconds of later frames whose scores weigh on each "
+                             "frame's confidence, as the file is written after the frames "
+                             "(default 0.2; 0: each frame's confidence as an online loop "
+                             "gets it)")
     parser.add_argument("--force", action="store_true", help="overwrite RESULT_FILE")
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
 
@@ -235,8 +240,8 @@ def run(args: argparse.Namespace) -> int:
     if args.classes is not None and not kitti:
         raise OcctrackError("--classes picks KITTI types; this is a MOTChallenge file (pass "
                             "--format kitti if it is not)", args.detections)
-    if (args.poses or args.calib) and not args.three_d:
-        raise OcctrackError("--poses and --calib go with --3d")
+    if (args.poses or args.calib or args.lookahead is not None) and not args.three_d:
+        raise OcctrackError("--poses, --calib and --lookahead go with --3d")
     if args.three_d:
         if not kitti:
             raise OcctrackError("--3d tracks KITTI files with the 3D columns; this is a "
@@ -348,7 +353,7 @@ def _track_3d(args: argparse.Namespace, config, length: int | None) -> int:
     from occtrack.io import kitti_geometry as geometry
     from occtrack.io.mot import check_gaps
     from occtrack.progress import summary
-    from occtrack.tracker.ground import track_kitti
+    from occtrack.tracker.ground import EVIDENCE_LOOKAHEAD, track_kitti
 
     table = kitti.read_kitti(args.detections)
     types = (None if args.classes is None else kitti.parse_classes(args.classes))
@@ -381,8 +386,9 @@ def _track_3d(args: argparse.Namespace, config, length: int | None) -> int:
         print(f"occtrack track: warning: {args.detections}: {note}", file=sys.stderr)
     start = time.perf_counter()
     dropped: list[str] = []
+    lookahead = EVIDENCE_LOOKAHEAD if args.lookahead is None else args.lookahead
     result = track_kitti(table, frames, config, poses, calibration, config.image_size,
-                         quiet=args.quiet, notes=dropped, written=types)
+                         quiet=args.quiet, notes=dropped, written=types, lookahead=lookahead)
     for note in dropped:
         print(f"occtrack track: note: {args.detections}: {note}", file=sys.stderr)
     theta = np.arctan2(result.box3d[:, 3], result.box3d[:, 5])

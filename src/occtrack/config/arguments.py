@@ -37,6 +37,20 @@ def positive_float(text: str) -> float:
 positive_float.__name__ = "positive number"
 
 
+def seconds(text: str) -> float:
+    """An argparse type: a finite number of seconds, 0 or more."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (value >= 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text} must be a finite number of seconds, 0 or more")
+    return value
+
+
+seconds.__name__ = "seconds"
+
+
 def frame_rate(text: str) -> float:
     """An argparse type: a frame rate a camera can have (`occtrack.config`'s MIN_FPS to
     MAX_FPS), so that --fps 20000 is a bad option value, as --fps 0 is."""
