@@ -267,6 +267,13 @@ def test_occtrack_runs_track_kitti_with_the_poses_and_calibration(tmp_path):
     still = track_kitti(det, FRAMES, config, None, calibration, SIZE)
     assert not np.array_equal(still.box3d[np.isin(still.frame, (8, 9, 10))],
                               ours.box3d[coasting])
+    # the benchmark's `ground` options are track_kitti's
+    online = benchmark_kitti.track("object-wise", seq, CLASSES, ground={"lookahead": 0.0})
+    direct = track_kitti(det, FRAMES, config, poses, calibration, SIZE, lookahead=0.0)
+    for column in ("frame", "id", "score"):
+        np.testing.assert_array_equal(getattr(online, column), getattr(direct, column))
+    with pytest.raises(ValueError, match="lookahead must be"):
+        benchmark_kitti.track("object-wise", seq, CLASSES, ground={"lookahead": -1.0})
 
 
 @needs_peers

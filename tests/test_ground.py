@@ -709,3 +709,25 @@ def test_a_car_whose_2d_box_is_its_3d_box_projected_is_drawn_at_its_mean_size(tm
         assert box3d[2] == pytest.approx(np.mean(lengths[:frame + 1]), abs=0.01)
         np.testing.assert_allclose(box, project_boxes(box3d[None], p2, (1242, 375))[0],
                                    atol=0.02)
+
+
+def test_the_evidence_weight_scales_each_frames_ratio():
+    """With weight w the evidence of one frame is w times the learner's log-likelihood ratio
+    (the first frame's odds start even, nothing to forget); a negative weight is refused."""
+    box = np.array([in_camera((0.0, 20.0), np.eye(3, 4))])
+    seen = {}
+    for weight in (1.0, 0.25):
+        tracker = GroundTracker(ground_config({"occlusion": "none",
+                                               "report_min_confidence": 0.0}),
+                                evidence_weight=weight)
+        learner = tracker._evidence_scores
+        learner.objects[:], learner.clutter[:] = 1e9, 1e9
+        learner.objects[1], learner.clutter[1] = 1e9, 9e9  # (even totals: .95 is 9 to 1)
+        learner.objects[5], learner.clutter[5] = 9e9, 1e9
+        for _ in range(3):
+            tracks = tracker.update(box, np.array([0.95]))
+        seen[weight] = tracks.score_llr[0]
+    assert seen[1.0] == pytest.approx(math.log(9), rel=1e-6)
+    assert seen[0.25] == pytest.approx(0.25 * math.log(9), rel=1e-6)
+    with pytest.raises(ValueError, match="evidence_weight must be"):
+        GroundTracker(evidence_weight=-1.0)

@@ -249,7 +249,7 @@ def result_table(frame, ids, types, ltwh, score, image_size=None) -> KittiTable:
 
 
 def track(name: str, seq: Sequence, classes: tuple[str, ...],
-          settings: dict | None = None) -> KittiTable:
+          settings: dict | None = None, ground: dict | None = None) -> KittiTable:
     """One tracker on a sequence's boxes of `classes`: occtrack (by occlusion model, with
     `settings` over the defaults) on all of them at once, a peer class by class. For a 3D
     sequence (`Sequence.three_d`) occtrack tracks the 3D boxes on the ground plane, every
@@ -265,7 +265,7 @@ def track(name: str, seq: Sequence, classes: tuple[str, ...],
         config = ground_config({**(settings or {}), "occlusion": name, "fps": seq.fps,
                                 "image_size": (seq.width, seq.height)})
         return track_kitti(seq.table, seq.length, config, seq.poses, seq.calibration,
-                           (seq.width, seq.height), quiet=True)
+                           (seq.width, seq.height), quiet=True, **(ground or {}))
     if name in MODELS:
         config = TrackerConfig.from_dict({**(settings or {}), "occlusion": name,
                                           "fps": seq.fps,
@@ -295,6 +295,7 @@ class Job:
     classes: tuple[str, ...] = CLASSES
     settings: tuple = ()  # (name, value) pairs of TrackerConfig settings for occtrack's models
     three_d: bool = False  # 3D detections: occtrack on the ground plane, also scored there
+    ground: tuple = ()  # (name, value) pairs of `track_kitti`'s options (3D only)
 
 
 def run_job(job: Job) -> dict:
@@ -304,7 +305,7 @@ def run_job(job: Job) -> dict:
     seq = cached_sequence(job.root, job.detections, job.sequence, job.three_d)
     peers.load_for(job.tracker)
     start = time.perf_counter()
-    result = track(job.tracker, seq, job.classes, dict(job.settings))
+    result = track(job.tracker, seq, job.classes, dict(job.settings), dict(job.ground))
     spent = time.perf_counter() - start
     out = {"seconds": spent, "classes": {}}
     tracks = {cls: int(len(np.unique(result.id[result.type == CLASS_TYPE[cls]])))
@@ -336,12 +337,14 @@ def run_job(job: Job) -> dict:
 
 def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | None = None,
               classes: tuple[str, ...] = CLASSES, quiet: bool = False, engine=None,
-              settings: dict | None = None) -> dict:
+              settings: dict | None = None, ground: dict | None = None) -> dict:
     """Track and score every sequence of a KITTI folder with every tracker; the report that
     `occtrack benchmark --json` writes for a KITTI folder. `settings`: TrackerConfig values
-    over the defaults for occtrack's models. With 3D detections (`has_3d`) occtrack's models
-    track on the ground plane and the report adds, per class, the ground-plane scores
-    ("ground", see the module); "notes" says what the caller should print."""
+    over the defaults for occtrack's models; `ground`: `track_kitti`'s options over its
+    defaults (3D detections only, e.g. {"lookahead": 0.0}). With 3D detections (`has_3d`)
+    occtrack's models track on the ground plane and the report adds, per class, the
+    ground-plane scores ("ground", see the module); "notes" says what the caller should
+    print."""
     base = Path(root).resolve()
     if not is_layout(base):
         raise OcctrackError("not a KITTI tracking folder: it needs label_02/ and det_02/",
@@ -361,9 +364,11 @@ def benchmark(root: str | os.PathLike, trackers: list[str], detections: str | No
         peers.load_for(name)
     pairs = tuple(sorted((k, tuple(v) if isinstance(v, list) else v)  # (hashable)
                          for k, v in (settings or {}).items()))
+    options = tuple(sorted((ground or {}).items()))
 
     def job_of(sequence: str, tracker: str) -> Job:
-        return Job(str(base), detections, sequence, tracker, tuple(classes), pairs, three_d)
+        return Job(str(base), detections, sequence, tracker, tuple(classes), pairs, three_d,
+                   options)
 
     jobs = [job_of(seq.name, name) for seq in sequences for name in trackers]
     done = run_jobs(jobs, engine, quiet, run_job,

@@ -260,11 +260,14 @@ class GroundTracker:
             this share of the smaller one is the same object seen twice and is dropped
             (`occtrack.models.footprints`; counted in `duplicates_dropped`); None keeps every
             box.
+        evidence_weight: what one frame's score log-likelihood ratio counts for in the
+            evidence (`SCORE_EVIDENCE_WEIGHT`; 1: every score an independent draw).
     """
 
     def __init__(self, config: TrackerConfig | None = None, reach: float = REACH,
                  score_evidence: bool = True,
-                 duplicate_overlap: float | None = DUPLICATE_OVERLAP):
+                 duplicate_overlap: float | None = DUPLICATE_OVERLAP,
+                 evidence_weight: float = SCORE_EVIDENCE_WEIGHT):
         if config is not None and not isinstance(config, TrackerConfig):
             raise ValueError(f"config must be a TrackerConfig, not {type(config).__name__}")
         if not (math.isfinite(reach) and reach > 0):
@@ -276,6 +279,9 @@ class GroundTracker:
             raise ValueError(f"duplicate_overlap must be in (0, 1] or None, not "
                              f"{duplicate_overlap}")
         self.duplicate_overlap = duplicate_overlap
+        if not (math.isfinite(evidence_weight) and evidence_weight >= 0):
+            raise ValueError(f"evidence_weight must be a number >= 0, not {evidence_weight}")
+        self.evidence_weight = float(evidence_weight)
         side = 2 * self.reach / UNIT
         self.config = replace(c, image_size=(side, side), camera_motion="none")
         self.geometry = SensorViewGeometry(c.occlusion_gain, *c.occlusion_ramp,
@@ -366,7 +372,7 @@ class GroundTracker:
         self._evidence_scores.update(scores[kept], self.tracker.filter.clutter_probability,
                                      self.tracker.filter.dt)
         if took.any():
-            llr[took] = SCORE_EVIDENCE_WEIGHT * self._evidence_scores.log_likelihood_ratio(
+            llr[took] = self.evidence_weight * self._evidence_scores.log_likelihood_ratio(
                 scores[tracks.detection_index[took]])
         odds = np.empty(n)
         for i in range(n):
@@ -506,7 +512,8 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
                 poses: np.ndarray | None = None, calibration=None,
                 image_size: tuple[float, float] | None = None, quiet: bool = True,
                 notes: list[str] | None = None, written: npt.ArrayLike | None = None,
-                lookahead: float = EVIDENCE_LOOKAHEAD):
+                lookahead: float = EVIDENCE_LOOKAHEAD,
+                evidence_weight: float = SCORE_EVIDENCE_WEIGHT):
     """Track a KITTI detection table's 3D boxes (`occtrack.io.kitti.KittiTable`, frames
     0..num_frames-1, every class at once, each object keeping its own) and return the result
     as a KittiTable: the 3D box in each frame's camera coordinates, and the 2D box the
@@ -524,7 +531,8 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     types whose tracks are written (None: every type); every type is tracked, as a box of
     another type can hide one of these or be the one it duplicates. `lookahead`: seconds of
     later frames whose scores weigh on each frame's confidence (`lookahead_evidence`; 0: the
-    filtered confidence); the confidence floor is applied after them."""
+    filtered confidence); the confidence floor is applied after them. `evidence_weight`:
+    `GroundTracker`'s."""
     from occtrack.io.kitti import ROUND_TYPES, KittiTable
     from occtrack.io.kitti_geometry import project_boxes
     from occtrack.progress import progress
@@ -538,7 +546,8 @@ def track_kitti(det, num_frames: int, config: TrackerConfig | None = None,
     if not (math.isfinite(lookahead) and lookahead >= 0):
         raise ValueError(f"lookahead must be a number of seconds >= 0, not {lookahead}")
     c = config or ground_config()
-    tracker = GroundTracker(replace(c, report_min_confidence=0.0))  # (the floor: below)
+    tracker = GroundTracker(replace(c, report_min_confidence=0.0),  # (the floor: below)
+                            evidence_weight=evidence_weight)
     ahead = round(lookahead * c.fps)
     pending: deque = deque()  # (frame, tracks, 2D boxes, written) not yet final
     scores = detection_scores(det.score)
