@@ -22,9 +22,8 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from occtrack.experiments import benchmark_kitti
+from occtrack.metrics.reliability import Reliability, pooled
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from hidden_kept import data_folder  # noqa: E402 (a script beside this one)
@@ -39,19 +38,11 @@ MODEL = "object-wise"
 def half_scores(report: dict, cls: str, sequences: list[str]) -> tuple[float, float]:
     """(HOTA weighted by each sequence's scored true boxes, ECE of the pooled reliability
     bins) of `cls` over `sequences` of a benchmark report."""
-    hota = truth = 0.0
-    boxes = confidence = right = 0.0
-    for name in sequences:
-        entry = report["sequences"][name]["classes"][cls]
-        hota += entry["trackers"][MODEL]["hota"] * entry["truth"]
-        truth += entry["truth"]
-        bins = entry["calibration"][MODEL]
-        n = np.asarray(bins["boxes"], dtype=float)
-        boxes = boxes + n
-        confidence = confidence + np.nan_to_num(np.asarray(bins["confidence"], float)) * n
-        right = right + np.nan_to_num(np.asarray(bins["right"], float)) * n
-    ece = float(np.abs(confidence - right).sum() / max(float(np.sum(boxes)), 1.0))
-    return hota / max(truth, 1.0), ece
+    entries = [report["sequences"][name]["classes"][cls] for name in sequences]
+    truth = sum(entry["truth"] for entry in entries)
+    hota = sum(entry["trackers"][MODEL]["hota"] * entry["truth"] for entry in entries)
+    tables = [Reliability.from_dict(entry["calibration"][MODEL]) for entry in entries]
+    return hota / max(truth, 1.0), pooled(tables).ece
 
 
 def main(argv: list[str] | None = None) -> int:

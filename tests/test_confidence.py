@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from occtrack.metrics.protocols import ScoredFrames
-from occtrack.metrics.reliability import reliability_table, right_boxes
+from occtrack.metrics.reliability import Reliability, pooled, reliability_table, right_boxes
 from occtrack.tracker import Tracker, TrackerConfig, confidence
 from occtrack.tracker.confidence import DRAWS, box_covariances, overlap_probability
 
@@ -26,6 +26,12 @@ def test_ece_by_hand():
                + Fraction(2, 5) * Fraction(1, 20))
     assert table.ece == pytest.approx(float(by_hand), abs=1e-15)
     assert table.as_dict()["right"][1] is None
+    read = Reliability.from_dict(table.as_dict())  # (a report's entry read back)
+    np.testing.assert_array_equal(read.edges, table.edges)
+    np.testing.assert_array_equal(read.boxes, table.boxes)
+    np.testing.assert_allclose(read.confidence, table.confidence, atol=1e-6)
+    np.testing.assert_allclose(read.right, table.right, atol=1e-6)
+    assert pooled([read, read]).ece == pytest.approx(table.ece, abs=1e-6)
 
 
 def test_ece_of_a_calibrated_and_of_a_sure_confidence():

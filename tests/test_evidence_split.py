@@ -24,8 +24,9 @@ def split():
 
 def _entry(hota, truth, boxes, confidence, right):
     return {"truth": truth, "trackers": {"object-wise": {"hota": hota}},
-            "calibration": {"object-wise": {"boxes": boxes, "confidence": confidence,
-                                            "right": right}}}
+            "calibration": {"object-wise": {"bins": len(boxes), "boxes": boxes,
+                                            "confidence": confidence, "right": right,
+                                            "ece": 0.0}}}
 
 
 def test_a_half_is_weighted_by_true_boxes_and_its_bins_pooled(split):

@@ -59,6 +59,16 @@ class Reliability:
                 "boxes": self.boxes.astype(int).tolist(),
                 "confidence": plain(self.confidence), "right": plain(self.right)}
 
+    @classmethod
+    def from_dict(cls, values: dict) -> Reliability:
+        """The table `as_dict` wrote (a benchmark report's "calibration" entries; an empty
+        bin's null read as NaN), to be `pooled` with others."""
+        def array(key):
+            return np.array([np.nan if v is None else v for v in values[key]], dtype=float)
+        return cls(np.linspace(0.0, 1.0, int(values["bins"]) + 1),
+                   np.asarray(values["boxes"], dtype=np.int64), array("confidence"),
+                   array("right"), float(values["ece"]))
+
 
 def right_boxes(frames: ScoredFrames) -> tuple[np.ndarray, np.ndarray]:
     """(rows, right): the result rows the protocol scores, in frame order, and whether each is
