@@ -131,6 +131,20 @@ def test_box_edges_round_trip_and_border_edges():
     assert (default.edge_noise, default.border_margin) == (0.069, 1.0)
 
 
+def test_edges_beyond_the_border_are_measured_unless_switched_off():
+    """An edge within the margin of the border is censored (a clipping detector's cut); one
+    beyond it by more than the margin is the detector's estimate of the unseen part and is
+    measured, unless `extrapolated_edges` is off (then censored, as before)."""
+    # left -0.5 (on the border), top -100 (beyond), right 1921 (on), bottom 1200 (beyond);
+    # then left -1.5, top 1.0 (on), right 1921.5, bottom 1080
+    z = np.array([[[-0.5, 1921.0], [-100.0, 1200.0]], [[-1.5, 1921.5], [1.0, 1080.0]]])
+    got = BoxMeasurement((1920, 1080)).observed(z)
+    np.testing.assert_array_equal(got, [[[False, False], [True, True]],
+                                        [[True, True], [False, False]]])
+    off = BoxMeasurement((1920, 1080), extrapolated_edges=False).observed(z)
+    assert not off.any()
+
+
 def test_border_edge_likelihood_is_probability_beyond_border_times_peak_density():
     """A left edge on the border: the right edge is scored as usual, the left one by
     Phi((border - predicted edge) / sd) / (sqrt(2 pi) sigma), sigma = 0.075 of the 160 px

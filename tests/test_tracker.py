@@ -244,6 +244,37 @@ def test_frames_between_tracked_ones_carry_tracks_along():
     assert left[29] - left[28] == pytest.approx(10.0, abs=1.5)
 
 
+def _tall_person(extrapolated: bool) -> list:
+    """A person taller than a 640 x 480 image, walking right at 3 px a frame, as a detector
+    that does not clip reports them (YOLOX on MOT17-05): top and bottom beyond the image, the
+    right edge from the border on past it; edges 4 px noisy. Each frame's (ids, boxes), and
+    the detection."""
+    rng = np.random.default_rng(0)
+    config = TrackerConfig(image_size=(640, 480), fps=14.0, extrapolated_edges=extrapolated)
+    tracker, out = Tracker(config), []
+    for k in range(40):
+        truth = np.array([400.0 + 3.0 * k, -100.0, 240.0, 680.0])
+        low = truth[:2] + rng.normal(0.0, 4.0, 2)
+        high = truth[:2] + truth[2:] + rng.normal(0.0, 4.0, 2)
+        detection = np.r_[low, high - low][None]
+        tracks = tracker.step(detection, np.array([0.8]))
+        out.append((tracks.ids, tracks.boxes, detection))
+    return out
+
+
+def test_edges_a_detector_placed_beyond_the_image_are_measured():
+    """Measured, the beyond-border edges hold the box: one id from the third frame on (three
+    hits confirm), reported with the detection's box exactly. Censored, only the left edge
+    and part of the right one are measured and no track is held."""
+    kept = _tall_person(True)
+    assert all(len(ids) == 0 for ids, _, _ in kept[:2])
+    for ids, boxes, detection in kept[2:]:
+        assert ids.tolist() == [1]
+        np.testing.assert_array_equal(boxes, detection)
+    censored = _tall_person(False)
+    assert sum(len(ids) for ids, _, _ in censored[10:]) <= 1
+
+
 def test_step_rejects_bad_boxes():
     tracker = Tracker()
     with pytest.raises(ValueError, match="shape"):

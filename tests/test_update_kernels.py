@@ -62,7 +62,7 @@ from occtrack.models.box import (
     _censored,
     _edges,
     _edges_of_boxes,
-    _inside_margin,
+    _measured_edges,
 )
 from occtrack.occlusion.box_objectwise import _occluder_boxes
 from occtrack.spatial import _sweep
@@ -748,11 +748,11 @@ def test_merge_packed(seed, n, M, spread):
 
 def tracks_reference(r, means, centre_std, used, took, coast, serial, reported_serial,
                      report_id, next_id, min_existence, coast_time, max_centre_std, boxes_in,
-                     hidden, classes, border):
+                     hidden, classes, observed):
     """The old body of `Tracker.tracks` after `object_moments`: (ids, boxes, existence,
     velocities, detection index, class, occluded, next id); report_id and reported_serial
-    in place. A detection's edge at or past `border` (per axis lowest, highest measured
-    coordinate) gives way to the state's when that lies farther out."""
+    in place. A detection's unmeasured edge (`observed` False: on the border) gives way to
+    the state's when that lies farther out."""
     height = np.maximum(2.0 * means[:, 1, 2], 1.0)
     trusted = (took >= 0) | ((coast <= coast_time + 1e-9)
                              & (centre_std.max(axis=1) < max_centre_std * height))
@@ -772,9 +772,10 @@ def tracks_reference(r, means, centre_std, used, took, coast, serial, reported_s
     state_lo = boxes[detected, :2]
     state_hi = state_lo + boxes[detected, 2:]
     lo, size = boxes_in[index[detected], :2], boxes_in[index[detected], 2:]
-    out = (lo <= border[:, 0]) & (state_lo < lo)
+    seen = observed[index[detected]]
+    out = ~seen[..., 0] & (state_lo < lo)
     lo, size = np.where(out, state_lo, lo), np.where(out, size + (lo - state_lo), size)
-    out = (lo + size >= border[:, 1]) & (state_hi > lo + size)
+    out = ~seen[..., 1] & (state_hi > lo + size)
     size = np.where(out, state_hi - lo, size)
     boxes[detected] = np.concatenate([lo, size], axis=-1)
     occluded = ~detected & (hidden[shown] > OCCLUDED_ABOVE)
@@ -805,16 +806,15 @@ def test_reported(seed, n, M):
     hidden[rng.random(L) < 0.2] = OCCLUDED_ABOVE
     classes = rng.integers(0, 3, L)
     rules = (0.3, 1.0, 0.4)
-    border = np.array([[20.0, 380.0], [40.0, 360.0]])  # (a share of the boxes touch it)
-    boxes_in[rng.random(M) < 0.3, 0] = 20.0  # (on the border exactly)
+    observed = rng.random((M, 2, 2)) < 0.7  # (a share of the edges on the border)
 
     e_serial, e_id = reported_serial.copy(), report_id.copy()
     expected = tracks_reference(r, means, centre_std, used, took, coast, serial, e_serial,
-                                e_id, next_id, *rules, boxes_in, hidden, classes, border)
+                                e_id, next_id, *rules, boxes_in, hidden, classes, observed)
     shown, got_next = _reported(r, means, centre_std, used, took, coast, serial,
                                 reported_serial, report_id, next_id, *rules)
     rows = _report_rows(shown, r, means, took, boxes_in, hidden, classes, OCCLUDED_ABOVE,
-                        border)
+                        observed)
     assert got_next == expected[-1]
     equal([report_id[shown], *rows, reported_serial, report_id],
           [*expected[:-1], e_serial, e_id])
@@ -837,20 +837,27 @@ def test_edges(seed, n, M):
 
 
 @pytest.mark.parametrize("seed,n,M", CASES)
-def test_inside_margin(seed, n, M):
-    """_inside_margin equals the old `observed`, edges exactly on the margin included."""
+@pytest.mark.parametrize("extrapolated", [True, False])
+def test_measured_edges(seed, n, M, extrapolated):
+    """_measured_edges equals numpy's rule, edges exactly on either side of the margin
+    included: an edge within the margin of the border is censored; one beyond it by more
+    than the margin is measured when `extrapolated`, censored otherwise."""
     rng = np.random.default_rng(seed)
     margin, image_size = 2.0, np.array([640.0, 480.0])
     z = detections(rng, M)
     z[rng.random((M, 2)) < 0.3, 0] = margin
+    z[rng.random((M, 2)) < 0.2, 0] = -margin
+    z[rng.random((M, 2)) < 0.2, 0] = -50.0
     on_high = rng.random((M, 2)) < 0.3
     z[on_high, 1] = np.broadcast_to(image_size - margin, (M, 2))[on_high]
+    beyond_high = rng.random((M, 2)) < 0.2
+    z[beyond_high, 1] = np.broadcast_to(image_size + margin, (M, 2))[beyond_high]
     z[rng.random((M, 2)) < 0.2, 1] = 700.0
-    low_ok = z[..., 0] > margin
-    high_ok = z[..., 1] < image_size - margin
+    low_ok = (z[..., 0] > margin) | (extrapolated & (z[..., 0] < -margin))
+    high_ok = (z[..., 1] < image_size - margin) | (extrapolated & (z[..., 1] > image_size + margin))
     expected = np.stack([low_ok, high_ok], axis=-1)
     W, H = image_size
-    equal([_inside_margin(z, margin, W - margin, H - margin)], [expected])
+    equal([_measured_edges(z, margin, W, H, extrapolated)], [expected])
 
 
 @pytest.mark.parametrize("seed,n,M", CASES)

@@ -93,6 +93,10 @@ class TrackerConfig:
     tail_scale: float = 3.0
     learn_tail_weight: bool = False
     border_margin: float = 1.0  # an edge this close to the border is unmeasured, px
+    # an edge beyond the image border by more than border_margin is the detector's estimate of
+    # the part the image does not show, measured like any other (models.box); false: censored
+    # like an edge on the border (a detector that pads the image)
+    extrapolated_edges: bool = True
     aspect_prior: bool = True  # an axis the border cuts takes its half-size from the other
     # through the aspect ratio of the whole detections so far (occtrack.models.aspect)
 

@@ -243,9 +243,12 @@ def _edges_of_boxes(object boxes):
     return out_
 
 
-def _inside_margin(object z, double margin, double right, double bottom):
-    """Which edges of z (M, 2, 2) lie inside the image by more than the margin: a low edge
-    above `margin`, a high one below `right` (x) or `bottom` (y)."""
+def _measured_edges(object z, double margin, double width, double height, bint extrapolated):
+    """Which edges of z (M, 2, 2) are measured: every edge but one on the image border, within
+    `margin` of it (a detector that clips its boxes puts the cut edge there). With
+    `extrapolated`, an edge beyond the border by more than the margin is measured too (the
+    detector placed it there: its estimate of the part the image does not show); without, it
+    counts as on the border."""
     cdef const f64* zp = doubles(z, 3, "z")
     _box_shape(z, 3, "z", 2, 2)
     cdef Py_ssize_t M = dim(z, 0), j
@@ -254,10 +257,12 @@ def _inside_margin(object z, double margin, double right, double bottom):
     cdef cnp.ndarray out_ = cnp.PyArray_EMPTY(3, shape, cnp.NPY_BOOL, 0)
     cdef b8* out = <b8*>cnp.PyArray_DATA(out_)
     for j in range(M):
-        out[j * 4] = zp[j * 4] > margin
-        out[j * 4 + 2] = zp[j * 4 + 2] > margin
-        out[j * 4 + 1] = zp[j * 4 + 1] < right
-        out[j * 4 + 3] = zp[j * 4 + 3] < bottom
+        out[j * 4] = zp[j * 4] > margin or (extrapolated and zp[j * 4] < -margin)
+        out[j * 4 + 2] = zp[j * 4 + 2] > margin or (extrapolated and zp[j * 4 + 2] < -margin)
+        out[j * 4 + 1] = (zp[j * 4 + 1] < width - margin
+                          or (extrapolated and zp[j * 4 + 1] > width + margin))
+        out[j * 4 + 3] = (zp[j * 4 + 3] < height - margin
+                          or (extrapolated and zp[j * 4 + 3] > height + margin))
     return out_
 
 

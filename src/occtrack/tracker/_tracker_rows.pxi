@@ -3,13 +3,13 @@
 
 
 def _report_rows(object shown, object r, object means, object took, object detections,
-                 object hidden, object classes, double occluded_above, object border):
+                 object hidden, object classes, double occluded_above, object observed):
     """The `Tracks` fields after the ids, for the slots `shown`: boxes (the detection's
     when one was taken, else the state's), existence, velocities, detection index, class and
     whether occlusion (probability above `occluded_above`) explains a miss. A detection's
-    edge on the image border (`border`: (2, 2) per axis the lowest and highest measured
-    coordinate) is where the image ends, not the person: the state's edge is reported there
-    when it lies farther out (the detector clips, the true box runs on)."""
+    unmeasured edge (`observed`, (M, 2, 2) as the measurement model's: one on the image
+    border) is where the image ends, not the person: the state's edge is reported there when
+    it lies farther out (the detector clips, the true box runs on)."""
     cdef const i64* sh = integers(shown, 1, "shown")
     cdef const f64* rr = doubles(r, 1, "r")
     cdef const f64* mm = doubles(means, 3, "means")
@@ -17,15 +17,16 @@ def _report_rows(object shown, object r, object means, object took, object detec
     cdef const f64* dt = doubles(detections, 2, "detections")
     cdef const f64* hd = doubles(hidden, 1, "hidden")
     cdef const i64* cl = integers(classes, 1, "classes")
-    cdef const f64* bd = doubles(border, 2, "border")
+    cdef const b8* ob = booleans(observed, 3, "observed")
     cdef Py_ssize_t K = dim(shown, 0), L = dim(r, 0), a, k, axis, t
     cdef double lo, size, state_lo, state_hi
     length(means, L, "means")
     length(took, L, "took")
     length(hidden, L, "hidden")
     length(classes, L, "classes")
-    if dim(detections, 1) != 4 or dim(border, 0) != 2 or dim(border, 1) != 2:
-        raise ValueError("detections (M, 4) and border (2, 2) are needed")
+    if (dim(detections, 1) != 4 or dim(observed, 0) != dim(detections, 0)
+            or dim(observed, 1) != 2 or dim(observed, 2) != 2):
+        raise ValueError("detections (M, 4) and observed (M, 2, 2) are needed")
     boxes_, velocities_ = new_doubles(2, K, 4), new_doubles(2, K, 2)
     existence_, index_ = new_doubles(1, K), new_integers(1, K)
     cls_, occluded_ = new_integers(1, K), zero_booleans(1, K)
@@ -48,9 +49,9 @@ def _report_rows(object shown, object r, object means, object took, object detec
                 lo, size = dt[t * 4 + axis], dt[t * 4 + 2 + axis]
                 state_lo = boxes[a * 4 + axis]
                 state_hi = boxes[a * 4 + axis] + boxes[a * 4 + 2 + axis]
-                if lo <= bd[axis * 2 + 0] and state_lo < lo:
+                if not ob[(t * 2 + axis) * 2] and state_lo < lo:
                     lo, size = state_lo, size + (lo - state_lo)
-                if lo + size >= bd[axis * 2 + 1] and state_hi > lo + size:
+                if not ob[(t * 2 + axis) * 2 + 1] and state_hi > lo + size:
                     size = state_hi - lo
                 boxes[a * 4 + axis], boxes[a * 4 + 2 + axis] = lo, size
         else:

@@ -186,7 +186,8 @@ class GaussianMixturePMB:
                                          c.clutter_rate, c.score_floor, c.clutter_score_power,
                                          EdgeTail(c.tail_weight, c.tail_scale,
                                                   learn=c.learn_tail_weight)
-                                         if c.tail_weight > 0 else None)
+                                         if c.tail_weight > 0 else None,
+                                         c.extrapolated_edges)
         self.measurement = measurement
         self.birth_model = births  # None: the box births (edges of the image, learnt sizes)
         self.detectability = TwoStateMarkov(c.stationary_detectability, c.detectability_ratio)
