@@ -263,9 +263,10 @@ def _tall_person(extrapolated: bool) -> list:
 
 
 def test_edges_a_detector_placed_beyond_the_image_are_measured():
-    """Measured, the beyond-border edges hold the box: one id from the third frame on (three
-    hits confirm), reported with the detection's box exactly. Censored, only the left edge
-    and part of the right one are measured and no track is held."""
+    """Measured, the beyond-border edges hold the box: one id from the third frame on (its
+    existence passes 1/2 with the third detection), reported with the detection's box
+    exactly. Censored, only the left edge and part of the right one are measured and no
+    track is held."""
     kept = _tall_person(True)
     assert all(len(ids) == 0 for ids, _, _ in kept[:2])
     for ids, boxes, detection in kept[2:]:
