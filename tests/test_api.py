@@ -318,6 +318,14 @@ def test_classes_and_times_at_the_boundary():
     for big in (2.0**62, -(2.0**62), 2.0**63):
         with pytest.raises(ValueError, match="whole numbers"):
             check_classes([big], 1)
+    # an integer array is taken as it is (as floats, ids past 2**53 would round)
+    ids = np.array([2**53 + 1, -7, 3], dtype=np.int64)
+    assert check_classes(ids, 3).tolist() == [2**53 + 1, -7, 3]
+    assert check_classes(np.array([5], dtype=np.uint8), 1).dtype == np.int64
+    with pytest.raises(ValueError, match="whole numbers"):
+        check_classes(np.array([2**62], dtype=np.int64), 1)
+    with pytest.raises(ValueError, match="one per box"):
+        check_classes(np.zeros(2, dtype=np.int64), 3)
     assert check_time(np.array(0.25), "dt") == 0.25 and check_time(np.float32(0.5), "dt") == 0.5
     with pytest.raises(ValueError, match="dt must be a number of seconds"):
         check_time(np.array([0.25, 0.5]), "dt")

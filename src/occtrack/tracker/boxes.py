@@ -101,7 +101,10 @@ def check_classes(classes: npt.ArrayLike | None, m: int) -> np.ndarray | None:
     """(M,) integer classes (whole floats such as YOLO's 0.0 accepted), or None."""
     if classes is None:
         return None
-    arr = as_array(classes, "classes", "of shape (M,)")
+    if isinstance(classes, np.ndarray) and classes.dtype.kind in "iu":
+        arr = classes  # (an integer array as it is: as a float, a large id would round)
+    else:
+        arr = as_array(classes, "classes", "of shape (M,)")
     if arr.shape != (m,):
         raise ValueError(f"classes must be {m} whole numbers, one per box, not an array of "
                          f"shape {arr.shape}")
