@@ -209,7 +209,6 @@ class Tracker:
         self._report_id = np.zeros(L, dtype=np.int64)
         self._next_id = 1
         self._boxes = np.zeros((0, 4))  # the last step's detections (camera shift, reports)
-        self._observed = np.zeros((0, 2, 2), dtype=bool)  # and which of their edges were measured
         self._timestamp: float | None = None
         self._camera_power = np.zeros(2)
         self._expansion_power = 0.0  # 1 / (px s)^2: the camera's recent squared expansion rate
@@ -320,12 +319,11 @@ class Tracker:
             camera = self._camera_motion(boxes, self.config.dt if dt is None else dt)
         edges = edges_from_ltwh(boxes)
         self.filter.step(edges, scores, camera, dt=dt, classes=labels)
-        observed = self.filter.measurement.observed(edges)
         if self.config.learn_score_model:
             self._scores.update(scores, self.filter.clutter_probability, self.filter.dt)
         if self.config.learn_size_noise:
             f = self.filter
-            self._sizes.record(f.slot_serial, f.slot_detection, boxes, observed)
+            self._sizes.record(f.slot_serial, f.slot_detection, boxes, f.observed)
             # (the differences span tracked frames of the nominal step, whatever this step's;
             # once the learner holds its full memory, a few frames' new differences barely
             # move the medians of thousands, and the estimate is renewed every REFRESH_NOISE
@@ -333,7 +331,7 @@ class Tracker:
             learner = self._sizes.learner
             if not learner.full or self._sizes.step % REFRESH_NOISE == 1:
                 f.size_noise = learner.noise(self.config.dt)
-        self._boxes, self._observed = boxes, observed
+        self._boxes = boxes
         return self.tracks()
 
     def _camera_motion(self, boxes: np.ndarray, dt: float) -> tuple[np.ndarray, ...]:
@@ -387,7 +385,7 @@ class Tracker:
             math.inf if c.report_centre_std is None else c.report_centre_std)
         boxes, existence, velocities, index, classes, occluded = _report_rows(
             shown, r, means, took, self._boxes, f.slot_hidden, f.slot_class, OCCLUDED_ABOVE,
-            self._observed)
+            f.observed)
         n = f.n
         confidence = report_confidence(f.label[:n], f.mass[:n], f.mean[:n], f.cov[:n], r, means,
                                        shown, boxes, index >= 0,

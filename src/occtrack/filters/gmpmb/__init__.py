@@ -232,6 +232,7 @@ class GaussianMixturePMB:
         self.steps = 0
         self.iterations = 0  # loopy BP iterations of the last step
         self.clutter_probability = np.zeros(0)  # of each detection of the last step
+        self.observed = np.zeros((0, 2, 2), dtype=bool)  # and which of its edges were measured
         # running sums of detected half-sizes (count, sum, sum of squares) for the birth prior
         self._size_stats = np.zeros((3, 2))
         self._size_settings = tuple(np.zeros(0) if value is None else
@@ -312,7 +313,7 @@ class GaussianMixturePMB:
         step in seconds (default `config.dt`); `classes` (M,) the detections' classes: an
         object takes only detections of its own class (None: one class)."""
         self._use_dt(self.config.dt if dt is None else float(dt))
-        observed = self.measurement.observed(z)
+        observed = self.observed = self.measurement.observed(z)
         if self.birth_model is None:
             self._learn_sizes(z, observed)
         self.measurement.learn(z, observed)
