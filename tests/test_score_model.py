@@ -180,6 +180,38 @@ def test_statistics_and_log_ratio_by_hand(memory, prior_weight):
                                    rtol=1e-14)
 
 
+@pytest.mark.parametrize("bins", [2, 7, 10])
+def test_compiled_sums_and_lookup_are_numpys_to_the_bit(bins):
+    """The compiled update and look-up (`_score_update`, `_score_lookup`) give numpy's
+    expressions exactly: clip to [0, 1], times the bins, truncated, the last bin capped; the
+    discount, then bincounts of pi and 1 - pi added. Scores below 0, above 1 and on every bin
+    edge included."""
+    rng = np.random.default_rng(bins)
+    learner = ScoreLearner(bins=bins, refresh=1)
+    clutter, objects = np.zeros(bins), np.zeros(bins)
+    edges = np.arange(bins + 1) / bins
+    for t in range(20):
+        scores = np.concatenate([rng.uniform(-0.5, 1.5, 30), edges, [-0.0, 0.0, 1.0, 1e300]])
+        if t == 3:
+            scores = np.zeros(0)
+        pis = rng.uniform(0.0, 1.0, len(scores))
+        dt = rng.uniform(0.01, 2.0)
+        keep = math.exp(-dt / learner.memory)
+        b = (np.clip(scores, 0.0, 1.0) * bins).astype(np.int64)
+        np.minimum(b, bins - 1, out=b)
+        clutter *= keep
+        objects *= keep
+        if len(scores):
+            clutter += np.bincount(b, weights=pis, minlength=bins)
+            objects += np.bincount(b, weights=1.0 - pis, minlength=bins)
+        learner.update(scores, pis, dt)
+        assert learner.clutter.tobytes() == clutter.tobytes()
+        assert learner.objects.tobytes() == objects.tobytes()
+        np.testing.assert_array_equal(learner.bin_of(scores), b)
+        want = np.exp(learner.log_ratio())[b]
+        assert learner.score_term(scores).tobytes() == want.tobytes()
+
+
 # -- learning (Monte Carlo) ----------------------------------------------------------------------
 
 def feed(learner, rng, frames, per_bin, alpha_beta, dt=DT):

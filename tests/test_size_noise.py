@@ -468,7 +468,7 @@ def test_camera_expansion_moves_boxes_away_from_the_centre():
 
 
 def test_the_median_of_squares_is_numpys_to_the_last_bit():
-    """The learner's median (one in-place partition) against np.median(np.square(x)) for odd
+    """The learner's median (a compiled quickselect) against np.median(np.square(x)) for odd
     and even lengths, one value to the full buffer, and scales from 1e-3 to 1e3."""
     from occtrack.models.motion import _median_of_squares
 
@@ -476,4 +476,11 @@ def test_the_median_of_squares_is_numpys_to_the_last_bit():
     for n in [*range(1, 40), 1999, 2000]:
         for scale in (1e-3, 1.0, 1e3):
             x = rng.standard_normal(n) * scale
+            assert _median_of_squares(x) == float(np.median(np.square(x)))
+    # orders and ties that defeat a careless selection: sorted either way, all equal, a few
+    # distinct values repeated, signs mixed (squares tie)
+    for n in (2, 3, 10, 11, 1999, 2000):
+        ramp = np.arange(n, dtype=float)
+        for x in (ramp, ramp[::-1].copy(), np.full(n, 0.3), rng.integers(0, 3, n) * 0.1,
+                  np.where(ramp % 2, -1.0, 1.0) * (ramp // 2)):
             assert _median_of_squares(x) == float(np.median(np.square(x)))

@@ -6,8 +6,9 @@ components), `_highway_sensor.pxi` (highway_sensor.py: the highway sensor's per-
 loops; its end terms are inline in `_highway_sensor.pxd`, for other extensions too),
 `_scan_geometry.pxi` (scan_geometry.py's `beam_window` and `near_range`, their inline C forms in
 `_scan_geometry.pxd`), `_scan_segments.pxi` (scan_segments.py's `_linearise`,
-`_other_beams` and `_gaussian_hits`) and `_scan_hand_made.pxi` (scan_hand_made.py's
-`_other_beams_hand_made`).
+`_other_beams` and `_gaussian_hits`), `_scan_hand_made.pxi` (scan_hand_made.py's
+`_other_beams_hand_made`), `_score_model.pxi` (score_model.py's per-frame sums) and
+`_motion.pxi` (motion.py's median of squares).
 
 The maths and the calls are in those Python modules, which import the kernels from here under
 the names they had. Each kernel is written as its numba loop read: the arrays are C pointers
@@ -21,9 +22,9 @@ loop, agrees with it to about 1e-11 relative). Kernels that call kernels call th
 cimport numpy as cnp
 from libc.math cimport M_PI, asin, atan2, erfc, exp, fabs, hypot, log, log1p, sqrt
 
-from occtrack._arrays cimport (argsort_stable, b8, booleans, dim, doubles, f64, i64, integers,
-                               length, new_booleans, new_doubles, new_integers, zero_booleans,
-                               zero_doubles, zero_integers)
+from occtrack._arrays cimport (argsort_stable, b8, booleans, dim, doubles, f64, fdata, i64,
+                               integers, length, new_booleans, new_doubles, new_integers,
+                               zero_booleans, zero_doubles, zero_integers)
 from occtrack.models._highway_sensor cimport _both_orders_c, _end_term_c, _ndtr_c, _near_c
 from occtrack.models._scan_geometry cimport (Window, beam_direction, beam_window_c, near_range_c,
                                              near_range_uv)
@@ -37,3 +38,5 @@ include "_highway_sensor.pxi"
 include "_scan_geometry.pxi"
 include "_scan_segments.pxi"
 include "_scan_hand_made.pxi"
+include "_score_model.pxi"
+include "_motion.pxi"

@@ -25,6 +25,7 @@ from functools import cached_property
 import numpy as np
 
 from occtrack.densities import gaussian
+from occtrack.models._models import _median_of_squares  # (np.median(np.square(x)), exact)
 
 
 @dataclass(frozen=True)
@@ -126,17 +127,3 @@ class SizeNoiseLearner:
         q2 = max(vl - v1, 0.0) / ((self.lag - 1) * dt)
         excess = max(q2 - self.prior**2, 0.0)
         return math.sqrt(self.prior**2 + n / (self.prior_weight + n) * excess)
-
-
-def _median_of_squares(x: np.ndarray) -> float:
-    """np.median(np.square(x)) of finite x, to the last bit, without np.median's checks (a
-    tracker renews the size noise every frame while its buffers fill): the middle value, or
-    the mean of the two middle values, of one partition done in place on the squares."""
-    sq = np.square(x)
-    n = len(sq)
-    k = n // 2
-    if n % 2:
-        sq.partition(k)
-        return float(sq[k])
-    sq.partition((k - 1, k))
-    return float((sq[k - 1] + sq[k]) / 2.0)

@@ -36,6 +36,8 @@ import math
 
 import numpy as np
 
+from occtrack.models._models import _score_lookup, _score_update
+
 BINS = 10
 
 
@@ -80,13 +82,18 @@ class ScoreLearner:
         """One frame: its detections' scores and the filter's clutter probabilities (in
         [0, 1], as the filter gives them)."""
         keep = math.exp(-dt / self.memory)
-        self.clutter *= keep
-        self.objects *= keep
-        if len(scores):
-            b = self.bin_of(scores)
-            pi = np.asarray(clutter_probability, dtype=float)
-            self.clutter += np.bincount(b, weights=pi, minlength=self.bins)
-            self.objects += np.bincount(b, weights=1.0 - pi, minlength=self.bins)
+        if not self.log_odds:  # (the same sums, compiled: `_score_update`)
+            _score_update(np.ascontiguousarray(scores, dtype=float),
+                          np.ascontiguousarray(clutter_probability, dtype=float), keep,
+                          self.clutter, self.objects)
+        else:
+            self.clutter *= keep
+            self.objects *= keep
+            if len(scores):
+                b = self.bin_of(scores)
+                pi = np.asarray(clutter_probability, dtype=float)
+                self.clutter += np.bincount(b, weights=pi, minlength=self.bins)
+                self.objects += np.bincount(b, weights=1.0 - pi, minlength=self.bins)
         self._updates += 1
         if self._updates % self.refresh == 0:
             self._table = np.exp(self.log_ratio())
@@ -104,7 +111,9 @@ class ScoreLearner:
     def score_term(self, scores: np.ndarray) -> np.ndarray:
         """g(s_j) of each detection: the clutter density's score factor (the learnt ratio of
         the detection's bin to the top bin's)."""
-        return self._table[self.bin_of(scores)]
+        if self.log_odds:
+            return self._table[self.bin_of(scores)]
+        return _score_lookup(np.ascontiguousarray(scores, dtype=float), self._table)
 
     def log_likelihood_ratio(self, scores: np.ndarray) -> np.ndarray:
         """log f_O(s_j) / f_C(s_j) of each detection: how much likelier its score is from an
