@@ -212,6 +212,15 @@ def test_compiled_sums_and_lookup_are_numpys_to_the_bit(bins):
         assert learner.score_term(scores).tobytes() == want.tobytes()
 
 
+def test_a_nan_score_is_refused():
+    """A NaN score has no bin: the learner says so rather than count it anywhere."""
+    learner = ScoreLearner()
+    with pytest.raises(ValueError, match="NaN"):
+        learner.update(np.array([0.5, np.nan]), np.array([0.1, 0.2]), DT)
+    with pytest.raises(ValueError, match="NaN"):
+        learner.score_term(np.array([np.nan]))
+
+
 # -- learning (Monte Carlo) ----------------------------------------------------------------------
 
 def feed(learner, rng, frames, per_bin, alpha_beta, dt=DT):
