@@ -14,7 +14,12 @@ detections) is tracked with the default settings (object-wise occlusion). Printe
 - score model: the learnt log-odds of clutter per score bin relative to the top bin
   (`ScoreLearner.log_ratio`), and the truth's: the detections matched one to one to a true
   object at IoU >= 0.5 are objects, the others clutter, the same log-odds per bin (bins with
-  fewer than 20 detections shown as '.'); and the prior's, score^-2.
+  fewer than 20 detections shown as '.'); and the prior's, score^-2;
+- occludability: the stationary value the tracker learnt (`OccludabilityLearner`, prior
+  0.8), and the truth's, 1 - P(hit | hidden) / P(hit | visible), a true object hit when a
+  detection matches it one to one at IoU >= 0.5: hidden is under a fifth visible by MOT17's
+  visibility column (visible: at least nine tenths), on KITTI occlusion level 2, largely
+  occluded (visible: level 0).
 
 The estimators are the tracker's own, so the comparison says how well the filter's association
 probabilities stand in for labels.
@@ -46,10 +51,13 @@ def sequences(root: Path):
             gt = seq.gt
             keep = (gt.id >= 0) & (gt.type != 8)  # every labelled object but DontCare
             box = gt.box[keep]
+            # KITTI's occlusion levels 0, 1, 2 (fully visible, partly, largely occluded) as a
+            # visibility 1, .5, 0; level 3 (unknown) as MOT17's -1, absent
+            level = gt.occluded[keep]
+            visibility = np.where(level <= 2, 1.0 - level / 2.0, -1.0)
             truth = MotTable(gt.frame[keep] + 1, gt.id[keep] * 16 + gt.type[keep],
                              np.concatenate([box[:, :2], box[:, 2:] - box[:, :2]], axis=1),
-                             np.ones(keep.sum()), np.full(keep.sum(), -1),
-                             np.ones(keep.sum()))
+                             np.ones(keep.sum()), np.full(keep.sum(), -1), visibility)
             yield (f"kitti {name}", seq.det, truth, seq.width, seq.height, seq.fps, seq.length,
                    True)
         return
@@ -102,6 +110,17 @@ def truth_log_odds(det: MotTable, truth: MotTable, length: int, bins: int) -> np
     return odds
 
 
+def truth_occludability(det: MotTable, truth: MotTable, length: int) -> float:
+    """1 - P(hit | under a fifth visible) / P(hit | at least nine tenths visible) of the true
+    objects (nan without both kinds)."""
+    hit = match(truth, det, length).gt_match >= 0
+    hidden = (truth.visibility >= 0) & (truth.visibility < 0.2)
+    visible = truth.visibility >= 0.9
+    if not hidden.any() or not visible.any() or not hit[visible].any():
+        return float("nan")
+    return float(1.0 - hit[hidden].mean() / hit[visible].mean())
+
+
 def row(values: np.ndarray) -> str:
     return " ".join("    ." if not np.isfinite(v) else f"{v:5.1f}" for v in values)
 
@@ -125,6 +144,8 @@ def main() -> None:
                   f"{floored:.3f}) h/sqrt(s)")
             print(f"  score log-odds learnt {row(tracker._scores.log_ratio())}")
             print(f"  score log-odds truth  {row(truth_log_odds(det, truth, length, 10))}")
+            print(f"  occludability learnt {tracker.filter.occludability.stationary:.2f}, "
+                  f"truth {truth_occludability(det, truth, length):.2f}")
 
 
 if __name__ == "__main__":

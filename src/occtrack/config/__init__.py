@@ -56,8 +56,8 @@ class TrackerConfig:
     visibility, so an object still hidden behind a tracked one cannot take a detection that
     shows up near where it was lost (measurement-wise weighs a hit by the detection's escape
     only, and its long-hidden objects take the next person to appear there: on MOT17-04, -11
-    and -05, 1, 8 and 22 identity jumps after a gap of more than 10 frames against 1, 5 and
-    11; docs/benchmarks.md).
+    and -05, 3, 3 and 7 identity jumps after a gap of more than 10 frames against 0, 1 and 7;
+    docs/occlusion-models.md).
     """
 
     occlusion: str = "object-wise"  # none, object-wise or measurement-wise
@@ -118,6 +118,10 @@ class TrackerConfig:
     detectability_ratio: float = 0.99  # fraction of a departure forgotten in half a second
     occludability: float = 0.8  # stationary probability that a measurement can be hidden
     occludability_ratio: float = 0.8
+    # learn the stationary occludability from how often the detector still finds the objects
+    # the occlusion model calls hidden (a detector trained on amodal boxes finds most of
+    # them), occludability the prior: models.occludability.OccludabilityLearner
+    learn_occludability: bool = True
     birth_detectability: float = 0.9
     birth_occludability: float = 0.5
 

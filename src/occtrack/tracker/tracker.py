@@ -35,6 +35,7 @@ from occtrack.filters.gmpmb import GaussianMixturePMB
 from occtrack.io.mot import MotTable
 from occtrack.models.box import edges_from_ltwh
 from occtrack.models.motion import SizeNoiseLearner
+from occtrack.models.occludability import OccludabilityLearner
 from occtrack.models.score_model import ScoreLearner
 from occtrack.occlusion.base import OcclusionModel
 from occtrack.occlusion.box_geometry import BoxOcclusionGeometry
@@ -214,6 +215,8 @@ class Tracker:
         self._expansion_power = 0.0  # 1 / (px s)^2: the camera's recent squared expansion rate
         self._sizes = SizeHistory(SizeNoiseLearner(c.size_noise))
         self._scores = ScoreLearner(c.score_floor, c.clutter_score_power)
+        if c.learn_occludability:
+            self.filter.occludability_learner = OccludabilityLearner(c.occludability)
         if c.learn_score_model:
             self.filter.measurement.score_model = self._scores
 

@@ -150,6 +150,7 @@ from occtrack.filters.gmpmb.weights import (
     _all_pairs,
     _association_weights,
     _clipped,
+    _hidden_evidence,
     _hit_edges,
     _miss_terms,
     _object_rows,
@@ -196,6 +197,9 @@ class GaussianMixturePMB:
         # value (`occtrack.models.detection_profile`, set by `tracker.ground`)
         self.detection_profile = None
         self.occludability = TwoStateMarkov(c.occludability, c.occludability_ratio)
+        # optional: learns the stationary occludability from the hidden objects' hits and
+        # misses (`occtrack.models.occludability`, set by the box tracker); None: the config's
+        self.occludability_learner = None
         self._dt_models: dict[float, tuple] = {}
         # the half-size process noise the prediction uses (h / sqrt(s)): the config's, or what
         # the tracker learnt (`models.motion.SizeNoiseLearner`)
@@ -460,9 +464,9 @@ class GaussianMixturePMB:
         # occlusion explains the misses of confirmed objects only: a newborn's broad density
         # overlaps the detections around it, and a miss it could blame on them would keep a
         # false track alive; the others are treated as not occludable (o = 0)
+        o = self.occludability.stationary  # (the config's, or the learnt value)
         established, occ, o_seen, r_slot, within = _occludable(
-            label, mass, self.occ[:n], self.slot_used, self.slot_hits, c.confirm_hits,
-            c.occludability)
+            label, mass, self.occ[:n], self.slot_used, self.slot_hits, c.confirm_hits, o)
         ctx = OcclusionContext(means=mean, covs=cov, weights=within, owner=label,
                                existence=r_slot, measurements=z,
                                measurement_model=self.measurement)
@@ -497,17 +501,19 @@ class GaussianMixturePMB:
         # such edges out (gating) splits a crowd's graph into the clusters that really compete
         miss_obj, w_new, strong, s_row, s_col, s_L = _association_weights(
             rows, A, mass, miss, det, occ, v, q, slots, self.slot_hidden, clutter,
-            seen_hidden, poisson_hit, c.occludability, e_row, e_col, L_edge,
+            seen_hidden, poisson_hit, o, e_row, e_col, L_edge,
             EDGE_FLOOR if c.gating else 0.0)
         marg = lbp_sparse(s_row, s_col, s_L, miss_obj, w_new, tol=c.lbp_tolerance,
                           max_iter=c.lbp_max_iterations)
         self.iterations = marg.iterations
         # pi_j, the probability that detection j is clutter: new, and of its new weight the
         # clutter's share (what a learnt detector model counts: models.score_model)
-        share = clutter * (1.0 - c.occludability * seen_hidden)
+        share = clutter * (1.0 - o * seen_hidden)
         self.clutter_probability = np.divide(marg.p_new * share, w_new,
                                              out=np.zeros(M), where=w_new > 0)
         self._count_detections(slots, s_row, s_col, marg.p_hit)
+        if self.occludability_learner is not None and self.detectability.stationary > 0:
+            self._learn_occludability(label, within, v, q, r_slot)
         learn = getattr(self.measurement, "learn_association", None)
         if learn is not None:  # (what a measurement model learns from the detections taken)
             learn(label, self.slot_detection, self.confirmed(), self.dt)
@@ -590,6 +596,18 @@ class GaussianMixturePMB:
         (row, col)."""
         _count_in_place(self.slot_detection, self.slot_age, self.slot_hits, self.slot_coast,
                         self.slot_used, slots, row, col, p_hit, self.dt)
+
+    def _learn_occludability(self, label: np.ndarray, within: np.ndarray, v: np.ndarray,
+                             q: np.ndarray, r_slot: np.ndarray) -> None:
+        """Feed this step's hidden confirmed objects, and whether each took a detection, to
+        the occludability learner, and relax every o_k towards its new value from the next
+        prediction on (`occtrack.models.occludability`)."""
+        c, learner = self.config, self.occludability_learner
+        evidence, weight = _hidden_evidence(
+            label, within, v, q, r_slot, self.slot_used, self.slot_hits, c.confirm_hits,
+            self.slot_detection, self.detectability.stationary, learner.hidden)
+        learner.add(evidence, weight, self.dt)
+        self.occludability = TwoStateMarkov(learner.value, c.occludability_ratio)
 
     def _confirm_or_delete(self, label: np.ndarray) -> np.ndarray:
         """Delete the Bernoullis that can no longer be detected in `confirm_hits` of their

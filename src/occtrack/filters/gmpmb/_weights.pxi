@@ -331,3 +331,39 @@ def _association_weights(rows, Py_ssize_t A, mass, miss, det, occ, v, q, slots, 
     strong, s_row, s_col, s_L = _strong_edges_c(er, ec, L, dim(L_edge, 0), fdata(miss_obj_),
                                                 fdata(w_new_), floor)
     return miss_obj_, w_new_, strong, s_row, s_col, s_L
+
+
+def _hidden_evidence(label, within, v, q, r, used, hits, i64 confirm_hits, detection,
+                     double detectability, double hidden):
+    """One frame's sums (A, B) of `models.occludability.OccludabilityLearner`: over the
+    confirmed objects i (used slots with `confirm_hits` hits) whose hidden share
+    u_i = 1 - sum_{k in i} (w_k / r_i) v_k (1 - q_k) is at least `hidden`, A = sum r_i u_i
+    (1 - h_i / d) and B = sum r_i u_i^2, h_i whether slot i took a detection (`detection`
+    >= 0) and d the `detectability` (> 0). Objects in slot order, as numpy sums a masked
+    array."""
+    cdef const i64* lab = integers(label, 1, "label")
+    cdef const f64* wi = doubles(within, 1, "within")
+    cdef const f64* vv = doubles(v, 1, "v")
+    cdef const f64* qq = doubles(q, 1, "q")
+    cdef const f64* rr = doubles(r, 1, "r")
+    cdef const b8* us = booleans(used, 1, "used")
+    cdef const i64* hi = integers(hits, 1, "hits")
+    cdef const i64* de = integers(detection, 1, "detection")
+    cdef Py_ssize_t n = dim(label, 0), L = dim(used, 0), k, i
+    if dim(within, 0) != n or dim(v, 0) != n or dim(q, 0) != n or dim(r, 0) < L \
+            or dim(hits, 0) < L or dim(detection, 0) < L:
+        raise ValueError("_hidden_evidence: one weight, v and q a component, one r, hit count "
+                         "and detection a slot")
+    cdef cnp.ndarray seen_ = zero_doubles(1, L)
+    cdef f64* seen = fdata(seen_)
+    for k in range(n):
+        if lab[k] >= 0:
+            seen[lab[k]] += wi[k] * vv[k] * (1.0 - qq[k])
+    cdef double A = 0.0, B = 0.0, u
+    for i in range(L):
+        if us[i] and hi[i] >= confirm_hits:
+            u = 1.0 - seen[i]
+            if u >= hidden:
+                A += rr[i] * u * (1.0 - (1.0 if de[i] >= 0 else 0.0) / detectability)
+                B += rr[i] * u * u
+    return A, B

@@ -12,6 +12,7 @@ from occtrack.filters.gmpmb._gmpmb import (  # noqa: F401 (the kernels, under th
     _all_pairs,
     _association_weights,
     _clipped,
+    _hidden_evidence,
     _hit_edges,
     _miss_terms,
     _new_weights,
