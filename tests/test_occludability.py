@@ -145,3 +145,10 @@ def test_a_detector_that_sees_behind_people_lowers_it_one_that_does_not_raises_i
         off.step(boxes, scores)
     assert off.filter.occludability_learner is None
     assert off.filter.occludability.stationary == 0.8
+
+
+def test_the_compiled_sums_refuse_a_label_past_the_slots():
+    ones = np.ones(2)
+    with pytest.raises(ValueError, match="past the slots"):
+        _hidden_evidence(np.array([0, 3]), ones, ones, ones * 0, np.ones(3),
+                         np.ones(3, bool), np.full(3, 5), 3, np.zeros(3, np.int64), 0.9, 0.8)

@@ -37,9 +37,13 @@ r' = r m / (1 - r + r m), its odds multiplied by m = sum_k w_k miss_k / r each m
 with miss_k = 1 - d_k + d_k o_k v_k q_k. m is near 1 only while something explains the miss:
 a detection in front of it (q_k, measurement-wise) or a tracked object in front (v_k,
 object-wise), and an occludability o_k near 1, which the misses themselves teach (o rises by
-Bayes after a miss with q > 0, falls after one with q = 0). With nothing in front, m = 1 - d_k
-and the object is gone in a few frames; when its cover walks away, likewise. Three rules keep
-this honest on real detections:
+Bayes after a miss with q > 0, falls after one with q = 0; between frames it relaxes to a
+stationary value, the config's or, with an `occludability_learner`, the one learnt from how
+often the detector still finds the objects the model calls hidden: a detector trained on
+amodal boxes finds most of them, and their misses are then not occlusion;
+`occtrack.models.occludability`). With nothing in front, m = 1 - d_k and the object is gone in
+a few frames; when its cover walks away, likewise. Three rules keep this honest on real
+detections:
 - n-of-m confirmation: a Bernoulli is deleted unless it takes a detection (p_hit > 1/2) in
   `confirm_hits` of its first `confirm_window` tracked frames, and occlusion enters the miss
   and hit terms of confirmed objects only (o = 0 for the others): a newborn's broad density

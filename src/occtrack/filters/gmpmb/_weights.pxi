@@ -339,8 +339,7 @@ def _hidden_evidence(label, within, v, q, r, used, hits, i64 confirm_hits, detec
     confirmed objects i (used slots with `confirm_hits` hits) whose hidden share
     u_i = 1 - sum_{k in i} (w_k / r_i) v_k (1 - q_k) is at least `hidden`, A = sum r_i u_i
     (1 - h_i / d) and B = sum r_i u_i^2, h_i whether slot i took a detection (`detection`
-    >= 0) and d the `detectability` (> 0). Objects in slot order, as numpy sums a masked
-    array."""
+    >= 0) and d the `detectability` (> 0), summed in slot order."""
     cdef const i64* lab = integers(label, 1, "label")
     cdef const f64* wi = doubles(within, 1, "within")
     cdef const f64* vv = doubles(v, 1, "v")
@@ -357,6 +356,8 @@ def _hidden_evidence(label, within, v, q, r, used, hits, i64 confirm_hits, detec
     cdef cnp.ndarray seen_ = zero_doubles(1, L)
     cdef f64* seen = fdata(seen_)
     for k in range(n):
+        if lab[k] >= L:
+            raise ValueError("_hidden_evidence: a component's label is past the slots")
         if lab[k] >= 0:
             seen[lab[k]] += wi[k] * vv[k] * (1.0 - qq[k])
     cdef double A = 0.0, B = 0.0, u
