@@ -20,6 +20,8 @@ def main() -> None:
     parser.add_argument("--data", default=None)
     parser.add_argument("--trackers",
                         default="none,measurement-wise,object-wise,bytetrack,ocsort,botsort")
+    parser.add_argument("--config", default=None,
+                        help="a settings file for occtrack's models (occtrack benchmark's)")
     args = parser.parse_args()
     from occtrack.cli import main as occtrack
 
@@ -28,7 +30,8 @@ def main() -> None:
             sequence = find_sequence(args.data, name)
             for variant in VARIANTS:
                 write_variant(sequence, variant, root)
-        occtrack(["benchmark", root, "--trackers", args.trackers, "--quiet"])
+        occtrack(["benchmark", root, "--trackers", args.trackers, "--quiet",
+                  *(["--config", args.config] if args.config else [])])
 
 
 if __name__ == "__main__":
